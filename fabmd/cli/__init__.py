@@ -1,0 +1,74 @@
+"""The ``fabmd`` command.
+
+Subcommands live in small modules of this package and are imported only when
+chosen, so ``fabmd --help`` starts fast. Errors print as one line
+(``fabmd: error: ...``); ``--traceback`` shows the whole traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: subcommand -> (module in fabmd.cli, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("demo", "run the main job: a small default scene end to end"),
+    "validate": ("validate", "physics checks against closed form (fibre-tension, ...)"),
+    "info": ("info", "LAMMPS version, packages and what fabmd needs of them"),
+}
+
+
+def register(name: str, module: str, help_text: str) -> None:
+    """Add a subcommand (used by the modules of this package)."""
+    COMMANDS[name] = (module, help_text)
+
+
+def _chosen(argv: list[str]) -> str | None:
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(argv: list[str]) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="fabmd",
+        description="fabmd — virtual testing lab for dry textile reinforcements "
+                    "(virtual fibres in LAMMPS). SI units unless stated.")
+    parser.add_argument("--traceback", action="store_true",
+                        help="show the full traceback on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    chosen = _chosen(argv)
+    for name, (module, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        if name == chosen:
+            importlib.import_module(f"fabmd.cli.{module}").add_arguments(p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``fabmd`` command; returns the exit status."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv)
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    module = importlib.import_module(f"fabmd.cli.{COMMANDS[args.command][0]}")
+    from ..errors import FabmdError
+
+    try:
+        return int(module.run(args) or 0)
+    except FabmdError as exc:
+        if args.traceback:
+            raise
+        print(f"fabmd: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("fabmd: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

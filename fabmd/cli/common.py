@@ -1,0 +1,43 @@
+"""Options shared by the subcommands that run LAMMPS."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def add_run_options(p: argparse.ArgumentParser, out_required: bool = False) -> None:
+    p.add_argument("--out", type=Path, required=out_required,
+                   help="results folder (must not exist unless --overwrite)"
+                   + ("" if out_required else "; default: a temporary folder"))
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing fabmd results folder")
+    p.add_argument("--backend", choices=["inprocess", "standalone"], default="inprocess",
+                   help="run LAMMPS in this process (default) or as 'mpirun lmp -in' "
+                        "in the run folder")
+    p.add_argument("--np", type=int, default=1, dest="ranks",
+                   help="MPI ranks for --backend standalone (in-process: use mpirun fabmd)")
+    p.add_argument("--threads", type=int, default=1, help="OpenMP threads per rank")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+
+
+def engine_from(args):
+    from ..engine import Engine
+
+    return Engine(backend=args.backend, ranks=args.ranks, threads=args.threads,
+                  progress=not args.quiet)
+
+
+def emit(obj: dict, as_json: bool, text: str) -> None:
+    """Print ``obj`` as JSON or ``text`` (rank 0 only)."""
+    from ..engine import mpi
+
+    if not mpi.is_root():
+        return
+    if as_json:
+        json.dump(obj, sys.stdout, indent=2, default=str)
+        sys.stdout.write("\n")
+    else:
+        print(text)

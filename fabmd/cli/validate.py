@@ -1,0 +1,55 @@
+"""``fabmd validate CHECK``: physics checks against closed form."""
+
+from __future__ import annotations
+
+import argparse
+
+from .common import add_run_options, emit, engine_from
+
+#: check name -> module in fabmd.verification
+CHECKS = {
+    "fibre-tension": "fibre_tension",
+}
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("check", choices=sorted(CHECKS), help="which check to run")
+    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a parameter of the check (SI units; repeatable), "
+                        "e.g. --set spacing_ratio=0.25")
+    add_run_options(p)
+
+
+def parse_settings(pairs: list[str]) -> dict[str, float]:
+    """``["a=1", "b=2e-3"]`` -> ``{"a": 1.0, "b": 0.002}``; one-line errors."""
+    from ..errors import InputError
+
+    out: dict[str, float] = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise InputError(f"--set expects KEY=VALUE, got {pair!r}")
+        try:
+            out[key.strip()] = float(value)
+        except ValueError:
+            raise InputError(f"--set {key}: expected a number, got {value!r}") from None
+    return out
+
+
+def run(args) -> int:
+    import importlib
+
+    module = importlib.import_module(f"fabmd.verification.{CHECKS[args.check]}")
+    settings = parse_settings(args.set)
+    result = module.check(out=args.out, engine=engine_from(args), overwrite=args.overwrite,
+                          settings=settings)
+    lines = [f"{args.check}: {'PASSED' if result['passed'] else 'FAILED'}"]
+    for key, value in result.items():
+        if key not in ("check", "passed", "cases"):
+            lines.append(f"  {key:32s} {value}")
+    for case in result.get("cases", []):
+        lines.append("  " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                                      for k, v in case.items()))
+    emit(result, args.json, "\n".join(lines))
+    return 0 if result["passed"] else 1

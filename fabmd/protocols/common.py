@@ -1,0 +1,73 @@
+"""What every protocol does around its own fixes: write the run folder, run, read back."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+import shlex
+from pathlib import Path
+
+import numpy as np
+
+from ..engine import Engine, EngineResult, mpi
+from ..engine.standalone import command_line
+from ..model.bead_model import BeadModel
+from ..results.folder import prepare_run_folder, write_json
+
+DATA_FILE = "model.data"
+
+
+def input_name(protocol: str) -> str:
+    """``in.<protocol>``: the input file name of a protocol."""
+    return f"in.{protocol}"
+
+
+def scene_dict(obj) -> dict:
+    """A resolved, JSON-able description of a scene object (dataclasses, enums, paths)."""
+    def convert(value):
+        if dataclasses.is_dataclass(value) and not isinstance(value, type):
+            out = {"type": type(value).__name__}
+            out.update({f.name: convert(getattr(value, f.name))
+                        for f in dataclasses.fields(value)})
+            return out
+        if isinstance(value, enum.Enum):
+            return value.value
+        if isinstance(value, dict):
+            return {str(k): convert(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [convert(v) for v in value]
+        if isinstance(value, Path):
+            return str(value)
+        if isinstance(value, np.generic):
+            return value.item()
+        if isinstance(value, float) and not math.isfinite(value):
+            return str(value)
+        return value
+    return convert(obj)
+
+
+def write_run_folder(out: Path | None, protocol: str, model: BeadModel, input_text: str,
+                     scene: dict, overwrite: bool = False) -> Path:
+    """Create the run folder and write data file, metadata, input, scene and ``run.sh``."""
+    run_dir = prepare_run_folder(out, overwrite=overwrite, prefix=protocol)
+    if mpi.is_root():
+        model.save(run_dir, stem=Path(DATA_FILE).stem)
+        name = input_name(protocol)
+        (run_dir / name).write_text(input_text)
+        write_json(run_dir / "scene.json", scene)
+        local = shlex.join(command_line(name, ranks=2))
+        (run_dir / "run.sh").write_text(
+            "#!/bin/sh\n"
+            "# Runs this folder with plain LAMMPS, here or on a cluster:\n"
+            f"#   NP=4 sh run.sh      (or: mpirun -np 4 lmp -in {name})\n"
+            f"# On this machine fabmd would run: {local}\n"
+            'cd "$(dirname "$0")"\n'
+            f'exec mpirun -np "${{NP:-1}}" "${{LMP:-lmp}}" -in {name} -log log.lammps\n')
+    mpi.barrier()  # every rank reads the input that rank 0 wrote
+    return run_dir
+
+
+def run_folder(engine: Engine, run_dir: Path, protocol: str) -> EngineResult:
+    """Run the protocol's input in ``run_dir`` with ``engine``."""
+    return engine.run(run_dir, input_name(protocol), label=protocol)

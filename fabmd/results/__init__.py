@@ -1,0 +1,1 @@
+"""Results: run folders, curves, summaries, plots and trajectories."""

