@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 from ..model.bead_model import BeadModel
+from ..model.beads import BeadParameters
+from ..model.contact import ContactModel
 from .templates import fmt, render
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
@@ -66,3 +68,13 @@ def guards(model: BeadModel, time_step_s: float, every: int = 100,
         bond_guard = "# no bonds: no bond-stretch guard"
     return render("guards", speed_fraction=SPEED_FRACTION, speed_limit=speed_limit,
                   every=every, bond_guard=bond_guard)
+
+
+def contact(model: BeadModel, contact_model: ContactModel | None,
+            beads: list[BeadParameters]) -> str:
+    """Fibre–fibre contact, or ``pair_style none`` when the scene needs none."""
+    if contact_model is None:
+        return render("contact_none")
+    c = contact_model.pair_coefficients(beads)
+    return render("contact_granular", normal=contact_model.normal,
+                  style=contact_model.pair_style(), **c)
