@@ -11,6 +11,11 @@ Identity of a bead:
   one fibre never contact each other);
 * ``fibre_yarn``   — yarn id (1-based) of each fibre, so ``yarn_ids`` per bead
   follow; ``yarns`` names each yarn and its family.
+
+Invariant: the beads of one fibre are contiguous and ordered along the fibre
+(first bead = one end). A periodic fibre closes with a bond from its last bead
+to its first across the box face. ``info`` carries JSON-able facts about where
+the model came from (fabric, unit cell, tiling) for later stages.
 """
 
 from __future__ import annotations
@@ -75,6 +80,7 @@ class BeadModel:
     angles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
     angle_types: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     angle_type_table: list[AngleType] = field(default_factory=list)
+    info: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.positions = np.asarray(self.positions, dtype=float).reshape(-1, 3)
@@ -135,6 +141,12 @@ class BeadModel:
                 d[:, k] -= length[k] * np.round(d[:, k] / length[k])
         return np.linalg.norm(d, axis=1)
 
+    def fibre_ends(self) -> np.ndarray:
+        """(n_fibres, 2) indices of the first and last bead of every fibre."""
+        starts = np.searchsorted(self.fibre_ids, np.arange(1, self.n_fibres + 1), side="left")
+        stops = np.searchsorted(self.fibre_ids, np.arange(1, self.n_fibres + 1), side="right")
+        return np.column_stack([starts, stops - 1])
+
     def beads_of_family(self, family: str) -> np.ndarray:
         """Indices of the beads of one yarn family."""
         if family not in self.family_names:
@@ -187,6 +199,7 @@ class BeadModel:
             "yarns": [y.__dict__ for y in self.yarns],
             "fibre_yarn": self.fibre_yarn.tolist(),
             "periodic": list(self.periodic),
+            "info": self.info,
         }
 
     def save(self, folder: Path, stem: str = "model") -> tuple[Path, Path]:

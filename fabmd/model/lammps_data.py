@@ -127,4 +127,5 @@ def read_data(path: Path, meta: dict) -> BeadModel:
         box_lo=lo, box_hi=hi, periodic=tuple(meta.get("periodic", (False,) * 3)),
         images=images, angles=angles, angle_types=angle_types,
         angle_type_table=[AngleType(**a) for a in meta.get("angle_types", [])],
+        info=meta.get("info", {}),
     )
