@@ -72,9 +72,18 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                     lmp.command(f"run {n} start {start} stop {start + steps} "
                                 f"pre {pre} post {post}")
                     sent += n
+                    reached = lmp.extract_global("ntimestep") - start
+                    if reached < sent:
+                        # a 'fix halt ... error continue' ended the run early (e.g. the
+                        # quasi-static criterion was met): skip the rest, as lmp would
+                        total -= steps - reached
+                        done += n - (sent - reached)
+                        break
                     done += n
                     if progress is not None and mpi.is_root():
                         progress(done, total)
+                if progress is not None and mpi.is_root():
+                    progress(done, total)
         except Exception as exc:  # noqa: BLE001 - LAMMPS raises plain Exception
             raise to_exception(str(exc), run_dir) from None
         finally:
