@@ -104,7 +104,8 @@ def _rebuild(model: BeadModel, positions: np.ndarray, keep_src: np.ndarray,
         family_names=model.family_names, bond_type_table=list(model.bond_type_table),
         fibre_yarn=fibre_yarn, yarns=yarns, box_lo=box_lo, box_hi=box_hi, periodic=periodic,
         images=None if images is None else images[order],
-        angles=angles, angle_types=angle_types, angle_type_table=list(model.angle_type_table), info=info)
+        angles=angles, angle_types=angle_types,
+        angle_type_table=list(model.angle_type_table), info=info)
 
 
 def _chain_angles(chains, new_index) -> np.ndarray:
