@@ -21,6 +21,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import inputs
 from ..errors import InputError
 from .material import VirtualFibre
@@ -158,3 +160,35 @@ class TimeStep:
                 f"{self.factor * critical_s:.3g} s ({self.factor:g} × critical) or leave it "
                 f"unset")
         return self.value_s
+
+
+def model_bead_parameters(model) -> list[BeadParameters]:
+    """Bead parameters of every bond type of a :class:`~fabmd.model.bead_model.BeadModel`.
+
+    Recovered from the model itself (rest length, bond coefficient, and the
+    lightest bead and smallest diameter of the type's family), so a stage that
+    receives only a model can still derive its time step and contact stiffness.
+    """
+    out = []
+    for bt in model.bond_type_table:
+        fam = model.family_names.index(bt.family) + 1 if bt.family in model.family_names else 0
+        mask = model.atom_types == fam
+        if not mask.any():
+            mask = np.ones(model.n_beads, bool)
+        bending = [at.coefficient * bt.rest_length_m for at in model.angle_type_table
+                   if at.family == bt.family]
+        out.append(BeadParameters(
+            diameter_m=float(model.diameters[mask].min()),
+            bond_length_m=bt.rest_length_m,
+            mass_kg=float(model.masses[mask].min()),
+            axial_stiffness_n=2.0 * bt.coefficient * bt.rest_length_m,
+            bending_stiffness_nm2=max(bending, default=0.0)))
+    return out
+
+
+def model_critical_time_step_s(model, contact_stiffness_n_per_m: float = 0.0) -> float:
+    """Smallest critical time step over the bond types of a model [s]."""
+    beads = model_bead_parameters(model)
+    if not beads:
+        raise InputError("model has no bond types: cannot derive a time step")
+    return min(b.critical_time_step_s(contact_stiffness_n_per_m) for b in beads)

@@ -1,0 +1,270 @@
+"""Crimp: turn a loose, idealised fabric into its as-woven state.
+
+The loom's work is imitated by a thermal-expansion-like ramp of the bond rest
+length per yarn family, r0 → r0·(1 + α·ΔT): binders shrink (α·ΔT < 0), put
+themselves in tension and compact the fabric; warp and weft may expand
+(α·ΔT > 0) to make room for their longer wavy path. In the finite-piece form
+the end bead of every fibre is held in all directions; in the periodic form
+(a unit cell with continuous yarns) nothing is held. After the ramp the final
+rest lengths are kept and damped dynamics run until the fabric is quasi-static
+(see :class:`fabmd.scene.quasi_static.QuasiStatic`), not for a fixed number of
+steps.
+
+Outputs in the run folder: ``crimped.data`` + ``crimped.json`` (the as-woven
+bead model, reusable by the test protocols), ``history.dat``/``history.csv``,
+``summary.json`` (loose and crimped measures) and ``history.png``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import inputs
+from ..engine import Engine, mpi
+from ..errors import InputError
+from ..model.bead_model import BeadModel
+from ..model.beads import TimeStep, model_bead_parameters
+from ..model.contact import ContactModel
+from ..results.folder import read_print_file, write_csv, write_json
+from ..results.measure import fabric_measures
+from ..results.plots import plot_curves
+from ..scene import blocks
+from ..scene.quasi_static import Damping, QuasiStatic
+from ..scene.templates import fmt, render
+from .common import DATA_FILE, run_folder, scene_dict, write_run_folder
+
+PROTOCOL = "crimp"
+CRIMPED = "crimped"
+
+
+@dataclass(frozen=True)
+class Crimp:
+    """The crimp stage.
+
+    Args:
+        expansion: rest-length strain α·ΔT per yarn family reached at the end of
+            the ramp, e.g. ``{"binder": -0.08, "warp": 0.01}``; families not named
+            keep their rest length. Each value in (−0.5, 0.5).
+        hold_ends: hold the end bead of every fibre (finite pieces; ignored for a
+            periodic model, which has no ends).
+        contact: fibre–fibre contact.
+        damping: numerical damping of the relaxation.
+        quasi_static: stop criterion of the relaxation.
+        time_step: time-step policy.
+        ramp_transits: ramp duration in axial wave-transit times of the longest fibre.
+        samples: history lines written.
+    """
+
+    expansion: dict[str, float] = field(default_factory=dict)
+    hold_ends: bool = True
+    contact: ContactModel = field(default_factory=ContactModel)
+    damping: Damping = field(default_factory=Damping)
+    quasi_static: QuasiStatic = field(default_factory=QuasiStatic)
+    time_step: TimeStep = field(default_factory=TimeStep)
+    ramp_transits: float = 40.0
+    samples: int = 200
+
+    def __post_init__(self):
+        if not isinstance(self.expansion, dict):
+            raise InputError(f"crimp.expansion must be a table family -> strain, "
+                             f"got {self.expansion!r}")
+        for fam, value in self.expansion.items():
+            inputs.in_range(f"crimp.expansion.{fam}", value, -0.5, 0.5, low_open=True,
+                            high_open=True)
+        inputs.positive("crimp.ramp_transits", self.ramp_transits)
+        inputs.positive_int("crimp.samples", self.samples, minimum=2)
+
+    # -- derived from the model --------------------------------------------------------
+    def check_model(self, model: BeadModel) -> None:
+        unknown = set(self.expansion) - set(model.family_names)
+        if unknown:
+            raise InputError(f"crimp.expansion names families {sorted(unknown)} that the fabric "
+                             f"does not have (it has {list(model.family_names)})")
+
+    def rest_length_scale(self, model: BeadModel) -> dict[int, float]:
+        """Final rest-length factor of every bond type (1-based)."""
+        return {i: 1.0 + self.expansion.get(bt.family, 0.0)
+                for i, bt in enumerate(model.bond_type_table, start=1)}
+
+    def time_step_s(self, model: BeadModel) -> float:
+        beads = model_bead_parameters(model)
+        kn = self.contact.normal_stiffness_n_per_m(beads)
+        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+
+    def ramp_steps(self, model: BeadModel) -> int:
+        beads = model_bead_parameters(model)
+        longest = int(np.bincount(model.fibre_ids).max())
+        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
+        return max(1000, int(self.ramp_transits * transit / self.time_step_s(model)))
+
+    def reference_force_n(self, model: BeadModel) -> float:
+        forces = [abs(self.expansion.get(bt.family, 0.0)) * 2 * bt.coefficient
+                  * bt.rest_length_m for bt in model.bond_type_table]
+        floor = 1e-3 * max(2 * bt.coefficient * bt.rest_length_m
+                           for bt in model.bond_type_table)
+        return max(max(forces), floor)
+
+    def reference_energy_j(self, model: BeadModel) -> float:
+        """Strain energy of every bond at the reference force, F²/(2k) each [J]."""
+        f = self.reference_force_n(model)
+        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        return model.n_bonds * f * f / (2 * k)
+
+    def held_beads(self, model: BeadModel) -> np.ndarray:
+        if not self.hold_ends or any(model.periodic[:2]):
+            return np.zeros(0, np.int64)
+        return np.unique(model.fibre_ends().ravel())
+
+    def input_text(self, model: BeadModel) -> str:
+        self.check_model(model)
+        dt = self.time_step_s(model)
+        beads = model_bead_parameters(model)
+        ramp = self.ramp_steps(model)
+        every = max(1, (ramp + self.quasi_static.max_steps // 4) // self.samples)
+        held = self.held_beads(model)
+        if len(held):
+            ids = [str(i + 1) for i in held]
+            lines = [" ".join(ids[k:k + 16]) for k in range(0, len(ids), 16)]
+            held_group = "group           held id " + " &\n    ".join(lines)
+            hold_fix = "# held beads are not integrated: they keep their position"
+        else:
+            held_group = "group           held empty"
+            hold_fix = "# periodic cell: nothing is held"
+        scale = self.rest_length_scale(model)
+        adapt_vars, adapt_args = [], []
+        for i, bt in enumerate(model.bond_type_table, start=1):
+            strain = scale[i] - 1.0
+            if strain == 0.0:
+                continue
+            adapt_vars.append(f"variable        r0_{i} equal \"{fmt(bt.rest_length_m)}*"
+                              f"(1+{fmt(strain)}*ramp(0,1))\"")
+            adapt_args.append(f"bond harmonic r0 {i} v_r0_{i}")
+        if not adapt_args:  # nothing to ramp: relax only
+            r0 = fmt(model.bond_type_table[0].rest_length_m)
+            adapt_vars.append(f"variable        r0_1 equal {r0}")
+            adapt_args.append("bond harmonic r0 1 v_r0_1")
+        final = blocks.bonds(model, rest_length_scale=scale).split("\n")
+        final_coeffs = "\n".join(line for line in final if line.startswith("bond_coeff"))
+        mass = float(np.median(model.masses))
+        text = render(
+            "crimp", held_group=held_group, adapt_variables="\n".join(adapt_vars),
+            adapt_args=" ".join(adapt_args), hold_fix=hold_fix,
+            damping=self.damping.commands("free", mass, default_time_s=ramp * dt / 10),
+            monitors=self.quasi_static.monitors("free", self.reference_force_n(model),
+                                                self.reference_energy_j(model)),
+            every=every, ramp_steps=ramp, final_bond_coeffs=final_coeffs,
+            stop_fix=self.quasi_static.stop_when_reached(),
+            relax_steps=self.quasi_static.max_steps)
+        max_scale = max(1.0, *scale.values())
+        return "\n".join([
+            blocks.setup(model, PROTOCOL, DATA_FILE, dt),
+            blocks.bonds(model),
+            blocks.contact(model, self.contact, beads),
+            blocks.guards(model, dt, max_rest_length_scale=max_scale).replace(
+                "thermo_modify   lost error lost/bond error", ""),
+            text,
+            "thermo_modify   lost error lost/bond error",
+            render("finish", final_data=f"{CRIMPED}.data"),
+        ])
+
+    # -- run ------------------------------------------------------------------------
+    def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
+            overwrite: bool = False) -> CrimpResult:
+        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures."""
+        engine = engine or Engine()
+        model = with_room_in_z(model)
+        text = self.input_text(model)  # validates before anything is written
+        run_dir = write_run_folder(out, PROTOCOL, model, text,
+                                   {"crimp": scene_dict(self), "model": model.metadata()},
+                                   overwrite=overwrite)
+        run = run_folder(engine, run_dir, PROTOCOL)
+        summary = None
+        crimped = None
+        if mpi.is_root():
+            crimped, summary = reduce(run_dir, model, self)
+            summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
+            write_json(run_dir / "summary.json", summary)
+        summary = mpi.bcast_json(summary)
+        if crimped is None:
+            crimped = load_crimped(run_dir)
+        return CrimpResult(Path(run_dir), crimped, summary)
+
+
+@dataclass
+class CrimpResult:
+    """The as-woven bead model and the measures of the crimp run."""
+
+    run_dir: Path
+    model: BeadModel
+    summary: dict
+
+
+def with_room_in_z(model: BeadModel, margin_diameters: float = 6.0) -> BeadModel:
+    """The model with at least ``margin_diameters`` bead diameters of box above and below."""
+    z = model.positions[:, 2]
+    need = margin_diameters * float(model.diameters.max())
+    lo = min(model.box_lo[2], z.min() - need)
+    hi = max(model.box_hi[2], z.max() + need)
+    if lo == model.box_lo[2] and hi == model.box_hi[2]:
+        return model
+    box_lo, box_hi = model.box_lo.copy(), model.box_hi.copy()
+    box_lo[2], box_hi[2] = lo, hi
+    return BeadModel(**{**model.__dict__, "box_lo": box_lo, "box_hi": box_hi})
+
+
+def load_crimped(run_dir: Path) -> BeadModel:
+    """The as-woven model LAMMPS wrote (``crimped.data`` + the loose model's metadata)."""
+    run_dir = Path(run_dir)
+    meta = run_dir / f"{CRIMPED}.json"
+    if not meta.exists():
+        meta = run_dir / "model.json"
+    return BeadModel.load(run_dir / f"{CRIMPED}.data", meta)
+
+
+def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, dict]:
+    """Read the crimp run back: crimped model (with final rest lengths), measures, history."""
+    run_dir = Path(run_dir)
+    raw = read_print_file(run_dir / "history.dat")
+    crimped = BeadModel.load(run_dir / f"{CRIMPED}.data", run_dir / "model.json")
+    scale = crimp.rest_length_scale(loose)
+    # the crimped model carries its final rest lengths, so later stages start unstressed
+    # only where the fabric is; bond coefficients stay those of the original E·A/l0
+    from ..model.bead_model import BondType
+
+    crimped.bond_type_table = [
+        BondType(bt.coefficient, bt.rest_length_m * scale[i], bt.family, bt.axial_stiffness_n)
+        for i, bt in enumerate(crimped.bond_type_table, start=1)]
+    crimped.info = dict(crimped.info, crimp={"expansion": crimp.expansion})
+    crimped.save(run_dir, stem=CRIMPED)
+    qs = crimp.quasi_static
+    settled = bool(raw["ke_ratio"][-1] < qs.kinetic_ratio
+                   and raw["force_ratio"][-1] < qs.force_ratio)
+    steps = int(raw["step"][-1])
+    history = {"step": raw["step"], "kinetic_energy_j": raw["kinetic_j"],
+               "strain_energy_j": raw["strain_energy_j"],
+               "ke_to_strain_energy": raw["ke_ratio"], "force_residual_ratio": raw["force_ratio"],
+               "thickness_m": raw["bead_centre_span_m"] + float(loose.diameters.max())}
+    write_csv(run_dir / "history.csv", history)
+    ramp = crimp.ramp_steps(loose)
+    plot_curves(run_dir / "history.png", [
+        {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
+    ], "time step", "thickness [mm]", title="Crimp: thickness during ramp and relaxation",
+        notes=f"ramp ends at step {ramp}\nquasi-static: {settled}")
+    summary = {
+        "protocol": PROTOCOL,
+        "expansion": crimp.expansion,
+        "time_step_s": crimp.time_step_s(loose),
+        "ramp_steps": ramp,
+        "steps": steps,
+        "quasi_static": settled,
+        "criterion": {"kinetic_ratio": qs.kinetic_ratio, "force_ratio": qs.force_ratio,
+                      "final_kinetic_ratio": float(raw["ke_ratio"][-1]),
+                      "final_force_ratio": float(raw["force_ratio"][-1])},
+        "loose": fabric_measures(loose),
+        "crimped": fabric_measures(crimped),
+    }
+    return crimped, summary

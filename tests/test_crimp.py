@@ -1,0 +1,116 @@
+"""Crimp stage, measures and calibration on a tiny plain weave (seconds)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from fabmd.engine import Engine
+from fabmd.errors import InputError
+from fabmd.protocols.calibrate import CrimpTargets, calibrate
+from fabmd.protocols.crimp import Crimp, load_crimped
+from fabmd.results.measure import family_crimp, passed_through, thickness_m
+
+from .fabrics import plain_weave_cell
+
+pytestmark = pytest.mark.lammps
+
+
+@pytest.fixture(scope="module")
+def crimped(tmp_path_factory):
+    loose = plain_weave_cell()
+    out = tmp_path_factory.mktemp("crimp") / "run"
+    result = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(loose, out,
+                                                               engine=Engine(progress=False))
+    return loose, result
+
+
+def test_crimp_compacts_and_settles(crimped):
+    loose, result = crimped
+    s = result.summary
+    assert s["quasi_static"], s["criterion"]
+    assert s["crimped"]["thickness_m"] < 0.85 * s["loose"]["thickness_m"]
+    # the yarns straighten under tension but stay wavy: crimp falls, stays > 0
+    for fam in ("warp", "weft"):
+        assert 0 < s["crimped"]["crimp_pct"][fam] < s["loose"]["crimp_pct"][fam]
+        assert s["crimped"]["tension"][fam]["mean_fibre_tension_n"] > 0
+    # the fabric lies on contact: thickness about two yarn diameters, small overlap
+    d = float(loose.diameters.max())
+    assert 1.85 * d < s["crimped"]["thickness_m"] < 2.05 * d
+    files = {p.name for p in result.run_dir.iterdir()}
+    assert {"crimped.data", "crimped.json", "summary.json", "history.csv",
+            "history.png", "in.crimp"} <= files
+
+
+def test_no_yarn_passes_through_another(crimped):
+    loose, result = crimped
+    report = passed_through(loose, result.model)
+    assert report["pairs_checked"] > 0
+    assert report["flipped_pairs"] == 0
+    assert report["max_overlap_ratio"] < 0.1
+    # the check can fail: mirror the fabric through its mid-plane
+    mirrored = load_crimped(result.run_dir)
+    mirrored.positions[:, 2] *= -1
+    assert passed_through(loose, mirrored)["flipped_pairs"] > 0
+
+
+def test_crimped_state_is_reusable_with_its_rest_lengths(crimped):
+    loose, result = crimped
+    again = load_crimped(result.run_dir)
+    ratio = again.bond_type_table[0].rest_length_m / loose.bond_type_table[0].rest_length_m
+    assert ratio == pytest.approx(0.9)
+    assert again.n_bonds == loose.n_bonds
+    assert json.loads((result.run_dir / "crimped.json").read_text())["info"]["crimp"]
+
+
+def test_finite_piece_holds_fibre_ends(tmp_path):
+    loose = plain_weave_cell(periodic=False)
+    ends = np.unique(loose.fibre_ends().ravel())
+    result = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(
+        loose, tmp_path / "f", engine=Engine(progress=False))
+    np.testing.assert_allclose(result.model.positions[ends], loose.positions[ends], atol=1e-12)
+    assert result.summary["crimped"]["thickness_m"] < result.summary["loose"]["thickness_m"]
+
+
+def test_measures_of_the_loose_cell():
+    loose = plain_weave_cell()
+    d = float(loose.diameters.max())
+    assert thickness_m(loose) == pytest.approx(1.5 * d + d)  # crossing gap 1.5 d + one d
+    c = family_crimp(loose)
+    assert c["warp"] == pytest.approx(c["weft"]) and c["warp"] > 0
+
+
+def test_calibration_reaches_target_thickness(tmp_path):
+    loose = plain_weave_cell()
+    target = 1.15e-3
+    result = calibrate(loose, CrimpTargets(thickness_m=target), out=tmp_path / "cal")
+    assert result.reached, result.reason
+    assert result.achieved["thickness"] == pytest.approx(target, rel=0.02)
+    assert len(result.runs) <= 6
+    assert (tmp_path / "cal" / "calibration.json").exists()
+
+
+def test_calibration_says_why_it_cannot_reach(tmp_path):
+    result = calibrate(plain_weave_cell(), CrimpTargets(thickness_m=0.5e-3), max_runs=6,
+                       out=tmp_path / "cal")
+    assert not result.reached
+    assert "lower the target" in result.reason or "max_runs" in result.reason
+
+
+@pytest.mark.parametrize("targets,words", [
+    (dict(thickness_m=-1e-3), "targets.thickness_m must be > 0"),
+    (dict(thickness_m=5e-3), "not below the loose fabric"),
+    (dict(crimp_pct={"weft": -1.0}), "targets.crimp_pct.weft must be >= 0"),
+    (dict(crimp_pct={"binder": 1.0}), "the fabric has"),
+])
+def test_bad_targets_fail_before_lammps(tmp_path, targets, words):
+    with pytest.raises(InputError, match=words.replace("(", r"\(")):
+        calibrate(plain_weave_cell(), CrimpTargets(**targets), out=tmp_path / "x")
+    assert not (tmp_path / "x").exists()
+
+
+def test_bad_expansion_is_refused():
+    with pytest.raises(InputError, match="crimp.expansion.binder"):
+        Crimp(expansion={"binder": -0.7})
+    with pytest.raises(InputError, match="does not have"):
+        Crimp(expansion={"binder": -0.1}).input_text(plain_weave_cell())
