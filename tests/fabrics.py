@@ -72,3 +72,25 @@ def plain_weave_cell(spacing_m=2e-3, diameter_m=0.5e-3, gap=1.5, cells=(1, 1),
         [period[0] + diameter_m, period[1] + diameter_m, 4 * diameter_m],
         periodic=(periodic, periodic, False),
         info={"fibre_area_m2": {"warp": fibre.area_m2, "weft": fibre.area_m2}})
+
+
+def parallel_fibres(n=4, length_m=10e-3, diameter_m=0.5e-3, spacing_ratio=0.5,
+                    material=SOFT_GLASS, gap=1.2) -> BeadModel:
+    """``n`` straight, parallel single-fibre yarns along x in one plane."""
+    fibre = VirtualFibre.solid(material, diameter_m)
+    b = bead_parameters(fibre, Discretisation(spacing_ratio=spacing_ratio))
+    nb = round(length_m / b.bond_length_m) + 1
+    x = np.arange(nb) * b.bond_length_m
+    pos = np.vstack([np.column_stack([x, np.full(nb, j * gap * diameter_m), np.zeros(nb)])
+                     for j in range(n)])
+    bonds = [(j * nb + i, j * nb + i + 1) for j in range(n) for i in range(nb - 1)]
+    return BeadModel(
+        positions=pos, diameters=diameter_m, masses=b.mass_kg, atom_types=1,
+        fibre_ids=np.repeat(np.arange(1, n + 1), nb), bonds=bonds, bond_types=1,
+        family_names=("warp",),
+        bond_type_table=[BondType(b.bond_coefficient, b.bond_length_m, "warp",
+                                  b.axial_stiffness_n)],
+        fibre_yarn=np.arange(1, n + 1), yarns=[Yarn(f"warp-{j}", "warp") for j in range(n)],
+        box_lo=[-diameter_m, -diameter_m, -diameter_m],
+        box_hi=[x[-1] + diameter_m, (n - 1) * gap * diameter_m + diameter_m, diameter_m],
+        info={"fibre_area_m2": {"warp": fibre.area_m2}})

@@ -22,6 +22,8 @@ from .library import new_instance
 from .script import logical_lines, plain_run_steps, total_run_steps
 
 ProgressCallback = Callable[[int, int], None]
+#: called between chunks with the LAMMPS instance (every rank; collective calls allowed)
+MonitorCallback = Callable[[object], None]
 
 
 @contextlib.contextmanager
@@ -40,8 +42,13 @@ def chunk_size(steps: int) -> int:
 
 
 def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
-                  progress: ProgressCallback | None = None, screen: bool = False) -> int:
+                  progress: ProgressCallback | None = None, screen: bool = False,
+                  monitor: MonitorCallback | None = None, monitor_every: int | None = None
+                  ) -> int:
     """Run ``run_dir/input_name`` in this process; return the number of steps run.
+
+    ``monitor(lmp)`` is called after every chunk of ``monitor_every`` steps (which
+    then sets the chunk size), on every rank.
 
     Raises:
         SimulationFailed / UnstableRun: LAMMPS stopped with an error.
@@ -65,8 +72,10 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                     continue
                 start = lmp.extract_global("ntimestep")
                 sent = 0
+                size = monitor_every if monitor is not None and monitor_every else \
+                    chunk_size(steps)
                 while sent < steps:
-                    n = min(chunk_size(steps), steps - sent)
+                    n = min(size, steps - sent)
                     pre = "yes" if sent == 0 else "no"
                     post = "yes" if sent + n == steps else "no"
                     lmp.command(f"run {n} start {start} stop {start + steps} "
@@ -80,6 +89,8 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                         done += n - (sent - reached)
                         break
                     done += n
+                    if monitor is not None:
+                        monitor(lmp)
                     if progress is not None and mpi.is_root():
                         progress(done, total)
                 if progress is not None and mpi.is_root():

@@ -19,6 +19,8 @@ from .library import preload_mpi
 _MPI_COMM_WORLD = 0x44000000
 _MPI_BYTE = 0x4C00010D
 _MPI_INT = 0x4C000405
+_MPI_DOUBLE = 0x4C00080B
+_MPI_SUM = 0x58000003
 _MPI_THREAD_FUNNELED = 1
 
 
@@ -107,3 +109,16 @@ def bcast_text(text: str | None) -> str:
     if n.value:
         lib.MPI_Bcast(buf, n.value, _MPI_BYTE, 0, _MPI_COMM_WORLD)
     return buf.raw[: n.value].decode()
+
+
+def allreduce_sum(values):
+    """Element-wise sum over ranks of a float sequence (identity outside mpirun)."""
+    lib = _lib()
+    data = [float(v) for v in values]
+    if lib is None:
+        return data
+    n = len(data)
+    send = (ctypes.c_double * n)(*data)
+    recv = (ctypes.c_double * n)()
+    lib.MPI_Allreduce(send, recv, n, _MPI_DOUBLE, _MPI_SUM, _MPI_COMM_WORLD)
+    return list(recv)

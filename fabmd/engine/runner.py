@@ -54,12 +54,18 @@ class Engine:
         inputs.positive_int("engine.ranks", self.ranks)
         inputs.positive_int("engine.threads", self.threads)
 
-    def run(self, run_dir: Path, input_name: str, label: str = "") -> EngineResult:
-        """Run ``run_dir/input_name``; raise SimulationFailed on a LAMMPS error."""
+    def run(self, run_dir: Path, input_name: str, label: str = "", monitor=None,
+            monitor_every: int | None = None) -> EngineResult:
+        """Run ``run_dir/input_name``; raise SimulationFailed on a LAMMPS error.
+
+        ``monitor(lmp)`` (in-process back end only) is called every
+        ``monitor_every`` steps; the standalone back end cannot call back.
+        """
         t0 = time.perf_counter()
         if self.backend == "inprocess":
             bar = Progress(label or input_name) if self.progress and mpi.is_root() else None
-            run_inprocess(run_dir, input_name, threads=self.threads, progress=bar)
+            run_inprocess(run_dir, input_name, threads=self.threads, progress=bar,
+                          monitor=monitor, monitor_every=monitor_every)
             ranks = mpi.size()
         else:
             run_standalone(run_dir, input_name, ranks=self.ranks, threads=self.threads)

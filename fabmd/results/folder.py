@@ -107,3 +107,12 @@ def read_print_file(path: Path) -> dict[str, np.ndarray]:
     rows = [line.split() for line in lines[1:] if line.strip() and not line.startswith("#")]
     data = np.array(rows, dtype=float).reshape(-1, len(names))
     return {n: data[:, i] for i, n in enumerate(names)}
+
+
+def read_ave_time(path: Path) -> dict[str, np.ndarray]:
+    """Read a LAMMPS ``fix ave/time`` file whose ``title2`` line names the columns."""
+    lines = Path(path).read_text().splitlines()
+    names = lines[1].lstrip("#").split()
+    rows = [line.split() for line in lines if line.strip() and not line.startswith("#")]
+    data = np.array(rows, dtype=float).reshape(-1, len(names))
+    return {n: data[:, i] for i, n in enumerate(names)}

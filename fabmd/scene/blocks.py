@@ -16,8 +16,9 @@ BOND_RUNAWAY = 1.5
 
 
 def boundary_text(model: BeadModel) -> str:
-    """LAMMPS ``boundary`` argument: p where periodic, else fixed (f)."""
-    return " ".join("p" if p else "f" for p in model.periodic)
+    """LAMMPS ``boundary`` argument: p where periodic, else shrink-wrapped with the data
+    file's box as minimum (m), so that moving clamps and tools never lose beads."""
+    return " ".join("p" if p else "m" for p in model.periodic)
 
 
 def neighbour_skin(model: BeadModel) -> float:
@@ -78,3 +79,11 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
     c = contact_model.pair_coefficients(beads)
     return render("contact_granular", normal=contact_model.normal,
                   style=contact_model.pair_style(), **c)
+
+
+def relax(held: str, free: str, quasi_static, reference_force_n: float,
+          reference_energy_j: float, damping_ratio: float = 0.7) -> str:
+    """Relax with ``held`` fixed until quasi-static, then reset the clock (time 0)."""
+    return render("relax", held=held, free=free, damping_ratio=damping_ratio,
+                  monitors=quasi_static.monitors(free, reference_force_n, reference_energy_j),
+                  check_every=quasi_static.check_every, max_steps=quasi_static.max_steps)

@@ -1,0 +1,144 @@
+"""Coupons: cut (or tile) a test piece from a relaxed fabric and let it relax free.
+
+A crimped fabric holds its yarn tensions through its held ends or its periodic
+box; a coupon cut out of it springs back where fibres were cut. The coupon is
+therefore relaxed free (nothing held, damped until quasi-static) and saved as a
+reusable state — ``coupon.data`` + ``coupon.json`` — that the test protocols
+start from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import inputs
+from ..engine import Engine, mpi
+from ..errors import InputError
+from ..model.bead_model import BeadModel
+from ..model.beads import TimeStep, model_bead_parameters
+from ..model.contact import ContactModel
+from ..model.transform import cut, tile
+from ..results.folder import write_json
+from ..results.measure import fabric_measures
+from ..scene import blocks
+from ..scene.quasi_static import QuasiStatic
+from ..scene.templates import render
+from .common import DATA_FILE, run_folder, scene_dict, write_run_folder
+
+PROTOCOL = "coupon"
+COUPON = "coupon"
+
+
+@dataclass(frozen=True)
+class Coupon:
+    """A rectangular coupon cut from a fabric.
+
+    Args:
+        length_m, width_m: coupon size [m] (length along x in the coupon).
+        angle_deg: coupon axis against the fabric's warp (x) axis; 45 for bias extension.
+        edge_zone_m: band along the fabric's edges the coupon stays out of [m].
+        tile: (nx, ny) copies of a periodic cell to build before cutting (None: cut
+            the fabric as it is; a periodic cell is tiled just enough automatically).
+        relax: stop criterion of the free relaxation (None: no relaxation).
+        contact: contact during the relaxation.
+        time_step: time-step policy of the relaxation.
+    """
+
+    length_m: float
+    width_m: float
+    angle_deg: float = 0.0
+    edge_zone_m: float = 0.0
+    tile: tuple[int, int] | None = None
+    relax: QuasiStatic | None = field(default_factory=lambda: QuasiStatic(max_steps=100_000))
+    contact: ContactModel = field(default_factory=ContactModel)
+    time_step: TimeStep = field(default_factory=TimeStep)
+
+    def __post_init__(self):
+        inputs.positive("coupon.length_m", self.length_m)
+        inputs.positive("coupon.width_m", self.width_m)
+        inputs.finite("coupon.angle_deg", self.angle_deg)
+        inputs.non_negative("coupon.edge_zone_m", self.edge_zone_m)
+        if self.tile is not None:
+            inputs.positive_int("coupon.tile[0]", self.tile[0])
+            inputs.positive_int("coupon.tile[1]", self.tile[1])
+
+    def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
+        """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
+        cell = fabric.box_hi - fabric.box_lo
+        a = np.radians(self.angle_deg)
+        span_x = abs(self.length_m * np.cos(a)) + abs(self.width_m * np.sin(a))
+        span_y = abs(self.length_m * np.sin(a)) + abs(self.width_m * np.cos(a))
+        pad = 2 * self.edge_zone_m + 2 * float(fabric.diameters.max())
+        return (int(np.ceil((span_x + pad) / cell[0])) + 1,
+                int(np.ceil((span_y + pad) / cell[1])) + 1)
+
+    def geometry(self, fabric: BeadModel) -> BeadModel:
+        """The coupon beads (before relaxation), length along x."""
+        source = fabric
+        if self.tile is not None:
+            source = tile(fabric, *self.tile, periodic=False)
+        elif fabric.periodic[0] and fabric.periodic[1]:
+            source = tile(fabric, *self.cells_needed(fabric), periodic=False)
+        elif any(fabric.periodic):
+            raise InputError("a fabric periodic in one direction only cannot be cut; "
+                             "use a fully periodic cell or a finite piece")
+        return cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
+                   edge_zone_m=self.edge_zone_m)
+
+    def input_text(self, model: BeadModel) -> str:
+        beads = model_bead_parameters(model)
+        kn = self.contact.normal_stiffness_n_per_m(beads)
+        dt = self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        ref = 1e-3 * ea
+        return "\n".join([
+            blocks.setup(model, PROTOCOL, DATA_FILE, dt),
+            blocks.bonds(model),
+            blocks.contact(model, self.contact, beads),
+            "group           held empty\ngroup           free subtract all held\n"
+            "fix             integrate free nve",
+            blocks.relax("held", "free", self.relax, ref, model.n_bonds * ref**2 / (2 * k)),
+            blocks.guards(model, dt),
+            render("finish", final_data=f"{COUPON}.data"),
+        ])
+
+    def run(self, fabric: BeadModel, out: Path | None = None, engine: Engine | None = None,
+            overwrite: bool = False) -> CouponResult:
+        """Cut the coupon from ``fabric``, relax it free and save it in ``out``."""
+        geometry = self.geometry(fabric)
+        if self.relax is None:
+            run_dir = write_run_folder(out, PROTOCOL, geometry, "# not relaxed\n",
+                                       {"coupon": scene_dict(self)}, overwrite=overwrite)
+            if mpi.is_root():
+                geometry.save(run_dir, stem=COUPON)
+            return CouponResult(Path(run_dir), geometry, {"relaxed": False})
+        text = self.input_text(geometry)
+        run_dir = write_run_folder(out, PROTOCOL, geometry, text, {"coupon": scene_dict(self)},
+                                   overwrite=overwrite)
+        run_folder(engine or Engine(), run_dir, PROTOCOL)
+        summary = None
+        if mpi.is_root():
+            relaxed = BeadModel.load(Path(run_dir) / f"{COUPON}.data", Path(run_dir) / "model.json")
+            relaxed.save(run_dir, stem=COUPON)
+            summary = {"relaxed": True, "cut": fabric_measures(geometry),
+                       "relaxed_state": fabric_measures(relaxed)}
+            write_json(Path(run_dir) / "summary.json", summary)
+        summary = mpi.bcast_json(summary)
+        return CouponResult(Path(run_dir), load_coupon(run_dir), summary)
+
+
+@dataclass
+class CouponResult:
+    run_dir: Path
+    model: BeadModel
+    summary: dict
+
+
+def load_coupon(run_dir: Path) -> BeadModel:
+    """A saved coupon state (``coupon.data`` + ``coupon.json``)."""
+    run_dir = Path(run_dir)
+    return BeadModel.load(run_dir / f"{COUPON}.data", run_dir / f"{COUPON}.json")

@@ -1,0 +1,60 @@
+"""Uniaxial tension: closed form on straight fibres, and a woven coupon's curve shape."""
+
+import pytest
+
+from fabmd.engine import Engine
+from fabmd.errors import InputError
+from fabmd.protocols.coupon import Coupon, load_coupon
+from fabmd.protocols.crimp import Crimp
+from fabmd.protocols.tension import Tension
+
+from .fabrics import SOFT_GLASS, parallel_fibres, plain_weave_cell
+
+pytestmark = pytest.mark.lammps
+
+
+def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
+    n = 4
+    coupon = parallel_fibres(n=n)
+    result = Tension(max_elongation_pct=1.2).run(coupon, tmp_path / "t",
+                                                 engine=Engine(progress=False))
+    s = result.summary
+    ea = SOFT_GLASS.modulus_pa * 3.14159265 * 0.5e-3**2 / 4
+    for strain in (0.5, 1.0):
+        measured = s["force_at_elongation_n"][f"{strain:g}"]
+        assert measured == pytest.approx(n * ea * strain / 100, rel=0.02)
+    assert s["energy_balance"]["relative_error"] < 0.05
+    assert s["max_kinetic_to_strain_energy"] < 0.05
+
+
+@pytest.fixture(scope="module")
+def woven_coupon(tmp_path_factory):
+    root = tmp_path_factory.mktemp("woven")
+    crimped = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(
+        plain_weave_cell(), root / "crimp", engine=Engine(progress=False))
+    coupon = Coupon(length_m=16e-3, width_m=8e-3).run(crimped.model, root / "coupon",
+                                                      engine=Engine(progress=False))
+    return coupon
+
+
+def test_coupon_is_relaxed_and_reusable(woven_coupon):
+    again = load_coupon(woven_coupon.run_dir)
+    assert again.n_beads == woven_coupon.model.n_beads
+    tension = woven_coupon.summary["relaxed_state"]["tension"]["warp"]["max_fibre_tension_n"]
+    assert tension < 1e-3  # the cut coupon sprang back to (almost) no tension
+
+
+def test_woven_coupon_is_soft_first_then_stiffens(woven_coupon, tmp_path):
+    result = Tension(max_elongation_pct=3.0).run(woven_coupon.model, tmp_path / "t",
+                                                 engine=Engine(progress=False))
+    s = result.summary
+    assert s["final_stiffness_n"] > 1.3 * s["initial_stiffness_n"]
+    assert 0.2 < s["transition_elongation_pct"] < 2.8
+    assert s["max_kinetic_to_strain_energy"] < 0.05
+    assert s["energy_balance"]["relative_error"] < 0.05
+    assert (result.run_dir / "curve.png").exists() and (result.run_dir / "curve.csv").exists()
+
+
+def test_clamps_that_leave_no_gauge_are_refused():
+    with pytest.raises(InputError, match="clamp_length_m"):
+        Tension(clamp_length_m=0.02).input_text(parallel_fibres())
