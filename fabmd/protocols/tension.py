@@ -115,11 +115,14 @@ class Tension:
         kn = self.contact.normal_stiffness_n_per_m(beads)
         return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
 
-    def steps(self, model: BeadModel) -> int:
-        return int(math.ceil(self.duration_s(model) / self.time_step_s(model)))
-
     def every(self, model: BeadModel) -> int:
-        return max(1, self.steps(model) // self.samples)
+        raw = math.ceil(self.duration_s(model) / self.time_step_s(model))
+        return max(1, raw // self.samples)
+
+    def steps(self, model: BeadModel) -> int:
+        """Whole output intervals, so that the last sample is the end of the test."""
+        every = self.every(model)
+        return every * math.ceil(self.duration_s(model) / self.time_step_s(model) / every)
 
     def gamma(self, model: BeadModel) -> float:
         tau = self.damping_time_s or self.duration_s(model) / 10
