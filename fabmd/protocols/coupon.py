@@ -100,8 +100,11 @@ class Coupon:
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
             "group           held empty\ngroup           free subtract all held\n"
-            "fix             integrate free nve",
-            blocks.relax("held", "free", self.relax, ref, model.n_bonds * ref**2 / (2 * k)),
+            "fix             integrate free nve\n"
+            "# a free coupon has nothing to stop rigid drift; local damping does not see it\n"
+            "fix             no_drift all momentum 100 linear 1 1 1 angular",
+            blocks.relax(model, dt, "held", "free", self.relax, ref,
+                         model.n_bonds * ref**2 / (2 * k)),
             blocks.guards(model, dt),
             render("finish", final_data=f"{COUPON}.data"),
         ])

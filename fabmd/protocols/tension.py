@@ -137,7 +137,7 @@ class Tension:
         ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
         ref_force *= 1e-3 * self.max_elongation_pct
         k = max(2 * bt.coefficient for bt in model.bond_type_table)
-        relax = blocks.relax("clamps", "free", self.relax, ref_force,
+        relax = blocks.relax(model, dt, "clamps", "free", self.relax, ref_force,
                              model.n_bonds * ref_force**2 / (2 * k))
         text = render("tension", x_left=left, x_right=right, relax=relax,
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),

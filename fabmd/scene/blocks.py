@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
 from ..model.contact import ContactModel
@@ -81,9 +83,15 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
                   style=contact_model.pair_style(), **c)
 
 
-def relax(held: str, free: str, quasi_static, reference_force_n: float,
-          reference_energy_j: float, damping_ratio: float = 0.7) -> str:
-    """Relax with ``held`` fixed until quasi-static, then reset the clock (time 0)."""
-    return render("relax", held=held, free=free, damping_ratio=damping_ratio,
+def relax(model: BeadModel, time_step_s: float, held: str, free: str, quasi_static,
+          reference_force_n: float, reference_energy_j: float, damping_ratio: float = 0.7,
+          drag_time_steps: float = 200.0) -> str:
+    """Relax with ``held`` fixed until quasi-static, then reset the clock (time 0).
+
+    Local (Cundall) damping plus a light viscous drag γ = m/τ with τ =
+    ``drag_time_steps`` time steps, which stops force-free floppy motion.
+    """
+    drag = float(np.median(model.masses)) / (drag_time_steps * time_step_s)
+    return render("relax", held=held, free=free, damping_ratio=damping_ratio, drag=drag,
                   monitors=quasi_static.monitors(free, reference_force_n, reference_energy_j),
                   check_every=quasi_static.check_every, max_steps=quasi_static.max_steps)
