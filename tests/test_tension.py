@@ -4,11 +4,10 @@ import pytest
 
 from fabmd.engine import Engine
 from fabmd.errors import InputError
-from fabmd.protocols.coupon import Coupon, load_coupon
-from fabmd.protocols.crimp import Crimp
+from fabmd.protocols.coupon import load_coupon
 from fabmd.protocols.tension import Tension
 
-from .fabrics import SOFT_GLASS, parallel_fibres, plain_weave_cell
+from .fabrics import SOFT_GLASS, parallel_fibres
 
 pytestmark = pytest.mark.lammps
 
@@ -25,16 +24,6 @@ def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
         assert measured == pytest.approx(n * ea * strain / 100, rel=0.02)
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
-
-
-@pytest.fixture(scope="module")
-def woven_coupon(tmp_path_factory):
-    root = tmp_path_factory.mktemp("woven")
-    crimped = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(
-        plain_weave_cell(), root / "crimp", engine=Engine(progress=False))
-    coupon = Coupon(length_m=16e-3, width_m=8e-3).run(crimped.model, root / "coupon",
-                                                      engine=Engine(progress=False))
-    return coupon
 
 
 def test_coupon_is_relaxed_and_reusable(woven_coupon):

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from . import mpi
+from .checkpoint import RESTART, CheckpointState, cut_outputs, resume_commands
 from .diagnosis import to_exception
 from .library import new_instance
 from .script import logical_lines, plain_run_steps, total_run_steps
@@ -43,12 +44,17 @@ def chunk_size(steps: int) -> int:
 
 def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                   progress: ProgressCallback | None = None, screen: bool = False,
-                  monitor: MonitorCallback | None = None, monitor_every: int | None = None
-                  ) -> int:
+                  monitor: MonitorCallback | None = None, monitor_every: int | None = None,
+                  checkpoint_every: int = 0, resume: bool = False) -> int:
     """Run ``run_dir/input_name`` in this process; return the number of steps run.
 
-    ``monitor(lmp)`` is called after every chunk of ``monitor_every`` steps (which
-    then sets the chunk size), on every rank.
+    Args:
+        monitor: ``monitor(lmp)`` is called after every chunk of ``monitor_every``
+            steps (which then sets the chunk size), on every rank. A monitor with
+            ``state()``/``restore(dict)`` methods is checkpointed with the run.
+        checkpoint_every: write a checkpoint at the first chunk boundary after
+            every this many steps (0: never); see :mod:`fabmd.engine.checkpoint`.
+        resume: continue from the run folder's checkpoint instead of starting over.
 
     Raises:
         SimulationFailed / UnstableRun: LAMMPS stopped with an error.
@@ -56,30 +62,57 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
     run_dir = Path(run_dir)
     commands = logical_lines((run_dir / input_name).read_text())
     total = total_run_steps(commands)
+    state = CheckpointState.load(run_dir) if resume else None
+    if state is not None and state.input_name != input_name:
+        raise to_exception(f"ERROR: the checkpoint belongs to {state.input_name}", run_dir)
     args = ["-log", "log.lammps", "-nocite"]
+    if resume:
+        args = ["-log", "log.resume.lammps", "-nocite"]
     if not screen:
         args += ["-screen", "none"]
     if threads > 1:
         args += ["-sf", "omp", "-pk", "omp", str(threads)]
     done = 0
+    first = 0
     with _working_dir(run_dir):
         lmp = new_instance(args)
+
+        def send(command: str) -> None:
+            try:
+                lmp.command(command)
+            except Exception as exc:  # noqa: BLE001 - LAMMPS raises plain Exception
+                raise to_exception(str(exc), run_dir) from None
+
         try:
-            for command in commands:
+            if state is not None:
+                if mpi.is_root():
+                    cut_outputs(run_dir, commands[: state.command_index], state.step)
+                mpi.barrier()
+                for command in resume_commands(commands, state):
+                    send(command)
+                if monitor is not None and state.monitor and hasattr(monitor, "restore"):
+                    monitor.restore(state.monitor)
+                first, done = state.command_index, state.done
+            last_checkpoint = done
+            for index in range(first, len(commands)):
+                command = commands[index]
                 steps = plain_run_steps(command)
                 if steps is None:
-                    lmp.command(command)
+                    send(command)
                     continue
-                start = lmp.extract_global("ntimestep")
-                sent = 0
+                if state is not None and index == state.command_index:
+                    start, sent = state.run_start, state.step - state.run_start
+                else:
+                    start, sent = lmp.extract_global("ntimestep"), 0
+                first_chunk = True
                 size = monitor_every if monitor is not None and monitor_every else \
                     chunk_size(steps)
                 while sent < steps:
                     n = min(size, steps - sent)
-                    pre = "yes" if sent == 0 else "no"
+                    pre = "yes" if first_chunk else "no"
                     post = "yes" if sent + n == steps else "no"
-                    lmp.command(f"run {n} start {start} stop {start + steps} "
-                                f"pre {pre} post {post}")
+                    send(f"run {n} start {start} stop {start + steps} pre {pre} post {post}")
+                    first_chunk = False
                     sent += n
                     reached = lmp.extract_global("ntimestep") - start
                     if reached < sent:
@@ -91,15 +124,32 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                     done += n
                     if monitor is not None:
                         monitor(lmp)
+                    if checkpoint_every and done - last_checkpoint >= checkpoint_every \
+                            and sent < steps:
+                        _write_checkpoint(lmp, run_dir, input_name, index, start, steps,
+                                          done, monitor)
+                        last_checkpoint = done
+                        first_chunk = True  # write_restart re-initialises: set up again
                     if progress is not None and mpi.is_root():
                         progress(done, total)
                 if progress is not None and mpi.is_root():
                     progress(done, total)
-        except Exception as exc:  # noqa: BLE001 - LAMMPS raises plain Exception
-            raise to_exception(str(exc), run_dir) from None
         finally:
             lmp.close()
     return done
+
+
+def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: int,
+                      steps: int, done: int, monitor) -> None:
+    """write_restart to a temporary name, then the state file: never a half checkpoint."""
+    lmp.command(f"write_restart {RESTART}.tmp")
+    step = int(lmp.extract_global("ntimestep"))
+    if mpi.is_root():
+        os.replace(Path(run_dir) / f"{RESTART}.tmp", Path(run_dir) / RESTART)
+        state = CheckpointState(input_name, index, int(start), int(steps), step, int(done),
+                                monitor.state() if hasattr(monitor, "state") else None)
+        state.save(run_dir)
+    mpi.barrier()
 
 
 def timed_run_inprocess(run_dir: Path, input_name: str, **kwargs) -> tuple[int, float]:

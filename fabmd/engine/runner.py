@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import inputs
+from ..errors import InputError
 from ..progress import Progress
 from . import mpi
 from .inprocess import run_inprocess
@@ -42,30 +43,39 @@ class Engine:
         ranks: MPI ranks for the standalone back end.
         threads: OpenMP threads per rank (``-sf omp``).
         progress: show progress on a terminal (in-process back end).
+        checkpoint_every: steps between checkpoints of in-process runs (0: none);
+            ``run(..., resume=True)`` continues from the last one.
     """
 
     backend: str = "inprocess"
     ranks: int = 1
     threads: int = 1
     progress: bool = True
+    checkpoint_every: int = 0
 
     def __post_init__(self):
         inputs.one_of("engine.backend", self.backend, BACKENDS)
+        if self.checkpoint_every:
+            inputs.positive_int("engine.checkpoint_every", self.checkpoint_every)
         inputs.positive_int("engine.ranks", self.ranks)
         inputs.positive_int("engine.threads", self.threads)
 
     def run(self, run_dir: Path, input_name: str, label: str = "", monitor=None,
-            monitor_every: int | None = None) -> EngineResult:
+            monitor_every: int | None = None, resume: bool = False) -> EngineResult:
         """Run ``run_dir/input_name``; raise SimulationFailed on a LAMMPS error.
 
         ``monitor(lmp)`` (in-process back end only) is called every
         ``monitor_every`` steps; the standalone back end cannot call back.
+        ``resume`` continues from the folder's checkpoint (in-process back end).
         """
         t0 = time.perf_counter()
+        if resume and self.backend != "inprocess":
+            raise InputError("resume needs the in-process back end (it writes the checkpoints)")
         if self.backend == "inprocess":
             bar = Progress(label or input_name) if self.progress and mpi.is_root() else None
             run_inprocess(run_dir, input_name, threads=self.threads, progress=bar,
-                          monitor=monitor, monitor_every=monitor_every)
+                          monitor=monitor, monitor_every=monitor_every,
+                          checkpoint_every=self.checkpoint_every, resume=resume)
             ranks = mpi.size()
         else:
             run_standalone(run_dir, input_name, ranks=self.ranks, threads=self.threads)

@@ -68,6 +68,17 @@ def write_run_folder(out: Path | None, protocol: str, model: BeadModel, input_te
     return run_dir
 
 
+def resume_folder(out: Path | None) -> Path:
+    """The run folder to resume: it must exist and hold a checkpoint."""
+    from ..engine.checkpoint import has_checkpoint
+    from ..errors import InputError
+
+    if out is None or not has_checkpoint(out):
+        raise InputError(f"nothing to resume in {out}: no checkpoint there (run with "
+                         f"checkpoints on, e.g. --checkpoint-every STEPS)")
+    return Path(out).resolve()
+
+
 def run_folder(engine: Engine, run_dir: Path, protocol: str) -> EngineResult:
     """Run the protocol's input in ``run_dir`` with ``engine``."""
     return engine.run(run_dir, input_name(protocol), label=protocol)

@@ -32,7 +32,7 @@ from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
-from .common import DATA_FILE, input_name, scene_dict, write_run_folder
+from .common import DATA_FILE, input_name, resume_folder, scene_dict, write_run_folder
 
 PROTOCOL = "tension"
 
@@ -156,16 +156,26 @@ class Tension:
 
     # -- run ------------------------------------------------------------------------
     def run(self, coupon: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False, check_rate: bool = False) -> TensionResult:
-        """Run the test on ``coupon``; with ``check_rate`` rerun at half speed and compare."""
+            overwrite: bool = False, check_rate: bool = False,
+            resume: bool = False, monitor: ContactPower | None = None) -> TensionResult:
+        """Run the test on ``coupon``.
+
+        Args:
+            check_rate: rerun at half speed and report the change of the curve.
+            resume: continue an interrupted run in ``out`` from its last checkpoint
+                (see ``Engine(checkpoint_every=...)``).
+        """
         engine = engine or Engine()
         text = self.input_text(coupon)
-        run_dir = write_run_folder(out, PROTOCOL, coupon, text,
-                                   {"tension": scene_dict(self)}, overwrite=overwrite)
-        monitor = ContactPower()
+        if resume:
+            run_dir = resume_folder(out)
+        else:
+            run_dir = write_run_folder(out, PROTOCOL, coupon, text,
+                                       {"tension": scene_dict(self)}, overwrite=overwrite)
+        monitor = monitor or ContactPower()
         every = self.every(coupon)
         run = engine.run(run_dir, input_name(PROTOCOL), label=PROTOCOL, monitor=monitor,
-                         monitor_every=every)
+                         monitor_every=every, resume=resume)
         result = None
         if mpi.is_root():
             result = reduce(run_dir, coupon, self, monitor)
@@ -205,13 +215,15 @@ class TensionResult:
         write_csv(self.run_dir / "curve.csv", self.curve)
         write_json(self.run_dir / "summary.json", self.summary)
         c, s = self.curve, self.summary
+        ke = s["max_kinetic_to_strain_energy"]
         plot_curves(self.run_dir / "curve.png", [
             {"x": c["elongation_pct"], "y": c["force_per_width_n_m"], "label": "fabric"},
         ], "elongation [%]", "force per width [N/m]",
             title="Uniaxial tension",
-            notes=f"gauge {1e3 * s['gauge_length_m']:.1f} mm, width {1e3 * s['width_m']:.1f} mm"
-                  f"\nKE/U after start-up <= {s['max_kinetic_to_strain_energy']:.3f}"
-                  f"\n{s['n_beads']} beads")
+            notes="\n".join([
+                f"gauge {1e3 * s['gauge_length_m']:.1f} mm, width {1e3 * s['width_m']:.1f} mm",
+                f"KE/U after start-up <= {ke:.3f}" if ke is not None else "KE/U: no load",
+                f"{s['n_beads']} beads"]))
 
 
 def reduce(run_dir: Path, coupon: BeadModel, test: Tension,

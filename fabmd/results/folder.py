@@ -100,12 +100,23 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     return {n: data[:, i] for i, n in enumerate(names)}
 
 
+def _unique_steps(names: list[str], data: np.ndarray) -> np.ndarray:
+    """Rows with a repeated ``step`` (a run set up again prints its first step twice)
+    are dropped, keeping the last."""
+    if "step" not in names or len(data) == 0:
+        return data
+    steps = data[:, names.index("step")]
+    _, last = np.unique(steps[::-1], return_index=True)
+    keep = np.sort(len(steps) - 1 - last)
+    return data[keep]
+
+
 def read_print_file(path: Path) -> dict[str, np.ndarray]:
     """Read a LAMMPS ``fix print`` file whose title line is ``# name1 name2 ...``."""
     lines = Path(path).read_text().splitlines()
     names = lines[0].lstrip("#").split()
     rows = [line.split() for line in lines[1:] if line.strip() and not line.startswith("#")]
-    data = np.array(rows, dtype=float).reshape(-1, len(names))
+    data = _unique_steps(names, np.array(rows, dtype=float).reshape(-1, len(names)))
     return {n: data[:, i] for i, n in enumerate(names)}
 
 
@@ -114,5 +125,5 @@ def read_ave_time(path: Path) -> dict[str, np.ndarray]:
     lines = Path(path).read_text().splitlines()
     names = lines[1].lstrip("#").split()
     rows = [line.split() for line in lines if line.strip() and not line.startswith("#")]
-    data = np.array(rows, dtype=float).reshape(-1, len(names))
+    data = _unique_steps(names, np.array(rows, dtype=float).reshape(-1, len(names)))
     return {n: data[:, i] for i, n in enumerate(names)}

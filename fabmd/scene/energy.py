@@ -52,8 +52,20 @@ class ContactPower:
             local = float(np.einsum("ij,ij->", a[:, 0:3], a[:, 6:9])
                           + np.einsum("ij,ij->", a[:, 3:6], a[:, 9:12]))
         total = mpi.allreduce_sum([local])[0]
-        self.steps.append(int(lmp.extract_global("ntimestep")))
+        step = int(lmp.extract_global("ntimestep"))
+        if self.steps and step <= self.steps[-1]:  # the clock was reset: a new phase
+            self.steps, self.power_w = [], []
+        self.steps.append(step)
         self.power_w.append(total)
+
+    def state(self) -> dict:
+        """Samples so far (saved with a checkpoint)."""
+        return {"steps": list(self.steps), "power_w": list(self.power_w)}
+
+    def restore(self, state: dict) -> None:
+        """Continue from a checkpoint's samples."""
+        self.steps = [int(s) for s in state["steps"]]
+        self.power_w = [float(p) for p in state["power_w"]]
 
     def work_j(self, steps: np.ndarray, dt: float) -> np.ndarray | None:
         """Cumulative work taken by the contacts at ``steps`` [J] (None if not sampled)."""

@@ -1,0 +1,115 @@
+"""Checkpoints of in-process runs, and the script that resumes from one.
+
+Every ``every_steps`` steps (at a chunk boundary) the in-process engine writes
+``checkpoint.restart`` (LAMMPS ``write_restart``: atoms, bonds, box, groups,
+time step and clock, and the state of fixes that keep one — clamp origins,
+contact history) and ``checkpoint.json`` (which command of the input was
+running, where its run started, and the Python monitors' samples).
+
+Resuming replays the input in order with these rules: commands that *define*
+settings (styles, coefficients, variables, computes, fixes, regions, outputs)
+are replayed; commands that *change the state* the restart file already holds
+(``read_data`` → ``read_restart``, ``group``, ``velocity``, ``reset_timestep``,
+finished ``run`` commands, ...) are skipped; output fixes append to their files,
+which are first cut back to the checkpoint; the interrupted ``run`` continues
+with the same ``start``/``stop`` so ramps pick up exactly where they were.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from .script import plain_run_steps
+
+RESTART = "checkpoint.restart"
+STATE = "checkpoint.json"
+
+#: commands whose effect before the checkpoint the restart file already holds
+STATE_COMMANDS = {
+    "units", "atom_style", "boundary", "newton", "dimension", "lattice", "create_box",
+    "create_atoms", "group", "velocity", "set", "displace_atoms", "reset_timestep",
+    "change_box", "delete_atoms", "delete_bonds", "create_bonds", "write_data",
+    "write_restart", "read_restart", "mass", "run", "minimize",
+}
+_FILE_KEYWORD = re.compile(r"\b(file)\s+(\S+)")
+
+
+@dataclass
+class CheckpointState:
+    """Where a run was when its checkpoint was written."""
+
+    input_name: str
+    command_index: int
+    run_start: int
+    run_steps: int
+    step: int
+    done: int
+    monitor: dict | None = None
+
+    def save(self, run_dir: Path) -> None:
+        path = Path(run_dir) / STATE
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(self.__dict__, indent=1))
+        os.replace(tmp, path)
+
+    @classmethod
+    def load(cls, run_dir: Path) -> CheckpointState:
+        return cls(**json.loads((Path(run_dir) / STATE).read_text()))
+
+
+def has_checkpoint(run_dir: Path) -> bool:
+    """True if ``run_dir`` holds a checkpoint to resume from."""
+    return (Path(run_dir) / STATE).exists() and (Path(run_dir) / RESTART).exists()
+
+
+def output_files(command: str) -> list[str]:
+    """Files a ``fix print`` / ``fix ave/time`` command writes to."""
+    words = command.split()
+    if len(words) > 3 and words[0] == "fix" and words[3] in ("print", "ave/time"):
+        return [m.group(2).strip("\"'") for m in _FILE_KEYWORD.finditer(command)]
+    return []
+
+
+def resume_commands(commands: list[str], state: CheckpointState) -> list[str]:
+    """The commands that bring a fresh LAMMPS to the checkpoint's state and settings.
+
+    The commands returned stop before the interrupted run (the caller continues it).
+    """
+    out = []
+    for command in commands[: state.command_index]:
+        name = command.split()[0]
+        if name == "read_data":
+            out.append(f"read_restart    {RESTART}")
+        elif name in STATE_COMMANDS or plain_run_steps(command) is not None:
+            continue
+        elif output_files(command):
+            out.append(_FILE_KEYWORD.sub(r"append \2", command))
+        else:
+            out.append(command)
+    return out
+
+
+def cut_outputs(run_dir: Path, commands: list[str], step: int) -> None:
+    """Cut the output files of ``commands`` back to the lines up to ``step`` (a line the
+    resumed run prints again at ``step`` is dropped by the readers)."""
+    for command in commands:
+        for name in output_files(command):
+            path = Path(run_dir) / name
+            if not path.exists():
+                continue
+            keep = []
+            for line in path.read_text().splitlines():
+                words = line.split()
+                if line.startswith("#") or not words:
+                    keep.append(line)
+                    continue
+                try:
+                    if float(words[0]) <= step:
+                        keep.append(line)
+                except ValueError:
+                    keep.append(line)
+            path.write_text("\n".join(keep) + "\n")
