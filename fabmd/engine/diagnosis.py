@@ -29,7 +29,14 @@ CAUSES: dict[str, tuple[str, str]] = {
                 "contact.stiffness_factor) or fibres are pushed through each other too fast"),
     "lost_atoms": ("atoms were lost (left the box or a bond partner went missing)",
                    "the run went unstable; lower time_step.factor or the loading speed"),
+    "runaway_atom": ("a bead flew far away (the box or the neighbour lists blew up)",
+                     "the run went unstable between two guard checks; lower "
+                     "time_step.factor or the loading speed"),
 }
+
+#: LAMMPS messages that mean an atom ran away, whatever check caught it first
+_RUNAWAY = ("too many neighbor bins", "out of range atoms", "neighbor list overflow",
+            "bond/angle/dihedral extent > half of periodic box length")
 
 _HALT = re.compile(r"fix-id guard_(\w+) met on step (\d+)")
 _ERROR = re.compile(r"ERROR(?: on proc \d+)?: (.*)")
@@ -59,6 +66,10 @@ def to_exception(text: str, run_dir: Path | None) -> SimulationFailed:
         what, remedy = CAUSES["lost_atoms"]
         return UnstableRun(f"unstable run: {what}. Likely cause and fix: {remedy}",
                            run_dir=run_dir, lammps_error=line, cause="lost_atoms")
+    if any(m in lowered for m in _RUNAWAY):
+        what, remedy = CAUSES["runaway_atom"]
+        return UnstableRun(f"unstable run: {what}. Likely cause and fix: {remedy}",
+                           run_dir=run_dir, lammps_error=line, cause="runaway_atom")
     if "non-numeric" in lowered or "nan" in lowered.split():
         what, remedy = CAUSES["nan"]
         return UnstableRun(f"unstable run: {what}. Likely cause and fix: {remedy}",

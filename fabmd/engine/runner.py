@@ -9,12 +9,13 @@ error into :class:`fabmd.errors.SimulationFailed` naming the run folder.
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from .. import inputs
-from ..errors import InputError
+from ..errors import InputError, SimulationFailed
 from ..progress import Progress
 from . import mpi
 from .inprocess import run_inprocess
@@ -68,6 +69,17 @@ class Engine:
         ``monitor_every`` steps; the standalone back end cannot call back.
         ``resume`` continues from the folder's checkpoint (in-process back end).
         """
+        try:
+            return self._run(run_dir, input_name, label, monitor, monitor_every, resume)
+        except SimulationFailed as exc:
+            # leave a record in the folder: what failed and why (and no curve files)
+            if mpi.is_root():
+                record = {"error": str(exc), "lammps_error": exc.lammps_error,
+                          "cause": getattr(exc, "cause", None), "step": getattr(exc, "step", None)}
+                (Path(run_dir) / "failure.json").write_text(json.dumps(record, indent=1) + "\n")
+            raise
+
+    def _run(self, run_dir, input_name, label, monitor, monitor_every, resume) -> EngineResult:
         t0 = time.perf_counter()
         if resume and self.backend != "inprocess":
             raise InputError("resume needs the in-process back end (it writes the checkpoints)")

@@ -139,13 +139,17 @@ class TimeStep:
         factor: fraction of the critical time step used when ``value_s`` is not
             given, in (0, 1]. Default 0.25 (LAMMPS-NOTES: use 0.2–0.3 dt_crit).
         value_s: an explicit time step [s]; must not exceed the critical one.
+        check: refuse time steps above the critical one (default). Only stability
+            studies (``benchmarks/stability.py``) turn this off, to find the boundary.
     """
 
     factor: float = 0.25
     value_s: float | None = None
+    check: bool = True
 
     def __post_init__(self):
-        inputs.in_range("time_step.factor", self.factor, 0.0, 1.0, low_open=True)
+        high = 1.0 if self.check else 100.0
+        inputs.in_range("time_step.factor", self.factor, 0.0, high, low_open=True)
         if self.value_s is not None:
             inputs.positive("time_step.value_s", self.value_s)
 
@@ -153,7 +157,7 @@ class TimeStep:
         """The time step to use given the critical one [s]."""
         if self.value_s is None:
             return self.factor * critical_s
-        if self.value_s > critical_s:
+        if self.value_s > critical_s and self.check:
             raise InputError(
                 f"time_step.value_s = {self.value_s:.3g} s is above the stable time step "
                 f"{critical_s:.3g} s of the stiffest bead; use at most "

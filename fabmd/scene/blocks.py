@@ -57,7 +57,7 @@ def bonds(model: BeadModel, rest_length_scale: dict[int, float] | None = None) -
     return render("bonds", bond_coeffs="\n".join(lines), angle_block=angle_block)
 
 
-def guards(model: BeadModel, time_step_s: float, every: int = 100,
+def guards(model: BeadModel, time_step_s: float, every: int = 20,
            max_rest_length_scale: float = 1.0) -> str:
     """Stability guards (see :mod:`fabmd.engine.diagnosis` for the causes)."""
     shortest = min((bt.rest_length_m for bt in model.bond_type_table),
