@@ -38,10 +38,20 @@ def thickness_m(model: BeadModel, mask: np.ndarray | None = None) -> float:
     return float((z + r).max() - (z - r).min())
 
 
-def fibre_crimp(model: BeadModel) -> np.ndarray:
-    """Crimp of every fibre (fraction, not %)."""
+def interior_mask(model: BeadModel, edge_m: float) -> np.ndarray:
+    """Beads at least ``edge_m`` inside the in-plane extent of the beads."""
+    p = model.unwrapped_positions[:, :2]
+    lo, hi = p.min(axis=0) + edge_m, p.max(axis=0) - edge_m
+    return ((p >= lo) & (p <= hi)).all(axis=1)
+
+
+def fibre_crimp(model: BeadModel, mask: np.ndarray | None = None) -> np.ndarray:
+    """Crimp of every fibre (fraction, not %), over its bonds with both beads in ``mask``."""
     vec = bond_vectors(model)
     fib = model.fibre_ids[model.bonds[:, 0]] - 1
+    if mask is not None:
+        inside = mask[model.bonds[:, 0]] & mask[model.bonds[:, 1]]
+        vec, fib = vec[inside], fib[inside]
     path = np.bincount(fib, weights=np.linalg.norm(vec, axis=1), minlength=model.n_fibres)
     span = np.column_stack([np.bincount(fib, weights=vec[:, k], minlength=model.n_fibres)
                             for k in range(2)])
@@ -50,9 +60,9 @@ def fibre_crimp(model: BeadModel) -> np.ndarray:
         return np.where(span > 0, path / span - 1.0, np.nan)
 
 
-def family_crimp(model: BeadModel) -> dict[str, float]:
-    """Mean crimp per yarn family (fraction)."""
-    c = fibre_crimp(model)
+def family_crimp(model: BeadModel, mask: np.ndarray | None = None) -> dict[str, float]:
+    """Mean crimp per yarn family (fraction), over the beads in ``mask``."""
+    c = fibre_crimp(model, mask)
     fam = np.asarray(model.family_names)[model.atom_types[model.fibre_ends()[:, 0]] - 1]
     return {f: float(np.nanmean(c[fam == f])) for f in model.family_names if (fam == f).any()}
 
@@ -112,15 +122,21 @@ def in_plane_area_m2(model: BeadModel) -> float:
     return float(ext[0] * ext[1])
 
 
-def fabric_measures(model: BeadModel, rest_length_scale: dict[int, float] | None = None
-                    ) -> dict:
-    """Summary of a fabric state (keys carry units)."""
-    t = thickness_m(model)
+def fabric_measures(model: BeadModel, rest_length_scale: dict[int, float] | None = None,
+                    edge_m: float = 0.0) -> dict:
+    """Summary of a fabric state (keys carry units).
+
+    ``edge_m`` > 0 measures thickness and crimp over the interior only (a finite
+    piece's edge zone is not representative).
+    """
+    mask = interior_mask(model, edge_m) if edge_m > 0 else None
+    t = thickness_m(model, mask)
     volume = fibre_volume_m3(model)
     area = in_plane_area_m2(model)
     return {
         "thickness_m": t,
-        "crimp_pct": {f: 100 * c for f, c in family_crimp(model).items()},
+        "crimp_pct": {f: 100 * c for f, c in family_crimp(model, mask).items()},
+        "measured_over": "interior" if mask is not None else "all beads",
         "fibre_volume_fraction": volume / (t * area) if np.isfinite(volume) else None,
         "in_plane_area_m2": area,
         "tension": family_tension_n(model, rest_length_scale),
