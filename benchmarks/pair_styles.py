@@ -8,7 +8,8 @@ physics:
 * ``gran/hooke`` (no tangential history: carries no Coulomb friction, μ = 0 only),
 * ``gran/hooke/history`` and ``gran/hertz/history`` (fabmd's defaults),
 * ``granular`` with the same Hooke/Hertz + linear_history model (no /omp version),
-* the ``gran/*`` styles again as ``/omp`` with 2 OpenMP threads.
+* the ``gran/*`` styles again as ``/omp`` with 2 OpenMP threads,
+* ``gran/hooke/history`` with fabmd's overlap monitor (its cost).
 
 Printed: the Pair time and the whole loop time (best of ``--repeat``), both as
 ratios to ``granular`` (hooke) on one thread; and, as a check that the styles
@@ -92,15 +93,17 @@ def pair_lines(style: str, contact: ContactModel, b) -> str:
     return text + "\nneigh_modify exclude molecule/intra all"
 
 
-def input_text(model, b, contact, style, steps: int) -> str:
+def input_text(model, b, contact, style, steps: int, monitor_every: int = 0) -> str:
     dt = 0.25 * b.critical_time_step_s(contact.normal_stiffness_n_per_m([b]))
     v = 1e-3 * GLASS.wave_speed_m_s
+    monitor = blocks.overlap_monitor(model, contact, [b], every=monitor_every) \
+        if monitor_every else ""
     return "\n".join([
         blocks.setup(model, "bench", "model.data", dt), blocks.bonds(model),
         pair_lines(style, contact, b),
         f"variable vx atom normal(0,{v},1)\nvariable vy atom normal(0,{v},2)\n"
         f"variable vz atom normal(0,{v},3)\nvelocity all set v_vx v_vy v_vz\n"
-        "fix integrate all nve\nthermo 0",
+        "fix integrate all nve\nthermo 0", monitor,
         f"run {steps}",
     ])
 
@@ -128,12 +131,16 @@ def run(folder: Path, text: str, threads: int) -> tuple[float, float, np.ndarray
     return pair, loop, f
 
 
-CONFIGS = [  # (label, style, normal, friction, threads)
+CONFIGS = [  # (label, style, normal, friction, threads[, overlap monitor every])
     ("granular hooke + linear_history", "granular", "hooke", 0.3, 1),
     ("granular hertz + linear_history", "granular", "hertz", 0.3, 1),
     ("gran/hooke (mu = 0 only)", "gran/hooke", "hooke", 0.0, 1),
     ("gran/hooke/history", "gran/hooke/history", "hooke", 0.3, 1),
     ("gran/hertz/history", "gran/hertz/history", "hertz", 0.3, 1),
+    ("gran/hooke/history + overlap monitor every 100", "gran/hooke/history", "hooke", 0.3, 1,
+     100),
+    ("gran/hooke/history + overlap monitor every 20", "gran/hooke/history", "hooke", 0.3, 1,
+     20),
     ("gran/hooke/omp, 2 threads (mu = 0)", "gran/hooke", "hooke", 0.0, 2),
     ("gran/hooke/history/omp, 2 threads", "gran/hooke/history", "hooke", 0.3, 2),
     ("gran/hertz/history/omp, 2 threads", "gran/hertz/history", "hertz", 0.3, 2),
@@ -160,16 +167,16 @@ def main() -> None:
     same = float(np.abs(f_classic - f_general).max() / np.abs(f_classic).max())
 
     times = {}
-    for label, style, normal, mu, threads in CONFIGS:
+    for label, style, normal, mu, threads, *every in CONFIGS:
         contact = ContactModel(friction=mu, normal=normal)
-        text = input_text(model, b, contact, style, args.steps)
+        text = input_text(model, b, contact, style, args.steps, *every)
         best = min((run(root, text, threads)[:2] for _ in range(args.repeat)),
                    key=lambda t: t[1])
         times[label] = best
         print(f"  {label:40s} pair {best[0]:.3f} s, loop {best[1]:.3f} s", flush=True)
     ref_pair, ref_loop = times[CONFIGS[0][0]]
     rows = [[label, threads, times[label][0], times[label][1], ref_pair / times[label][0],
-             ref_loop / times[label][1]] for label, _s, _n, _m, threads in CONFIGS]
+             ref_loop / times[label][1]] for label, _s, _n, _m, threads, *_e in CONFIGS]
     header = ["style", "threads", "pair s", "loop s", "pair speed-up vs granular",
               "loop speed-up vs granular"]
     body = (f"{model.n_beads} beads in {model.n_fibres} fibres (hexagonal bundle, "
@@ -179,6 +186,16 @@ def main() -> None:
             f"Same physics: largest force difference gran/hooke/history vs granular hooke "
             f"linear_history on step 0: {same:.1e} of the largest force.\n\n"
             + table(header, rows))
+    t = {label: times[label] for label in times}
+    hh = t["gran/hooke/history"]
+    body += (
+        "\n\nChoice (`ContactModel.pair_style()`): `gran/hooke` when μ = 0 with Hooke "
+        "contact (no tangential force, no history to store), else `gran/hooke/history` "
+        "(Hertz: `gran/hertz/history`). `granular` carries the same physics at "
+        f"{t[CONFIGS[0][0]][1] / hh[1]:.1f}× the loop time ({t[CONFIGS[0][0]][0] / hh[0]:.1f}× "
+        "the pair time) and has no OpenMP version. The overlap monitor sampled every 100 "
+        f"steps costs {100 * (t[CONFIGS[5][0]][1] / hh[1] - 1):.0f} % of the loop. "
+        "Timings with 2 threads are noisy on a shared 2-core machine; rerun on a quiet one.")
     print(body)
     if args.write:
         update_section("Pair styles", body, "python benchmarks/pair_styles.py --write")

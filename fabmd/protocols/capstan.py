@@ -49,10 +49,9 @@ class Capstan:
 
     Args:
         fibre: the virtual fibre (default 0.1 mm E-glass).
-        friction: Coulomb μ between fibre and cylinder (>= 0); sets ``tool.friction``.
+        tool: the fibre–cylinder contact; its friction is the μ of exp(μθ)
+            (default μ = 0.3).
         wrap_angle_rad: wrap angle θ, in (0, 2π).
-        tool: stiffness and damping of the cylinder contact (its friction is replaced
-            by ``friction``).
         radius_m: cylinder radius R [m] (> 0).
         load_strain: T_in as a fraction of the fibre's E·A, in (0, 0.01].
         pull_distance_m: how far the pulled end moves [m]; default 3 bead diameters.
@@ -66,9 +65,8 @@ class Capstan:
     """
 
     fibre: VirtualFibre = field(default_factory=default_fibre)
-    friction: float = 0.3
+    tool: ToolContact = field(default_factory=lambda: ToolContact(friction=0.3))
     wrap_angle_rad: float = math.pi
-    tool: ToolContact = field(default_factory=ToolContact)
     radius_m: float = 0.3e-3
     load_strain: float = 1e-3
     pull_distance_m: float | None = None
@@ -79,7 +77,6 @@ class Capstan:
     samples: int = 400
 
     def __post_init__(self):
-        inputs.non_negative("capstan.friction", self.friction)
         inputs.in_range("capstan.wrap_angle_rad", self.wrap_angle_rad, 0.0, 2 * math.pi,
                         low_open=True, high_open=True)
         inputs.positive("capstan.radius_m", self.radius_m)
@@ -94,12 +91,9 @@ class Capstan:
 
     # -- derived ----------------------------------------------------------------------
     @property
-    def contact(self) -> ToolContact:
-        """The cylinder contact with this test's μ."""
-        t = self.tool
-        return ToolContact(friction=self.friction, stiffness_factor=t.stiffness_factor,
-                           stiffness_n_per_m=t.stiffness_n_per_m,
-                           tangential_ratio=t.tangential_ratio, damping_ratio=t.damping_ratio)
+    def friction(self) -> float:
+        """μ between fibre and cylinder."""
+        return self.tool.friction
 
     @property
     def beads(self):
@@ -108,7 +102,7 @@ class Capstan:
     @property
     def time_step_s(self) -> float:
         b = self.beads
-        kn = self.contact.normal_stiffness_n_per_m([b])
+        kn = self.tool.normal_stiffness_n_per_m([b])
         return self.time_step.resolve(b.critical_time_step_s(kn))
 
     @property
@@ -225,7 +219,7 @@ class Capstan:
             blocks.bonds(model),
             render("contact_none"),
             render("capstan", radius=self.radius_m, zlo=model.box_lo[2], zhi=model.box_hi[2],
-                   tool=blocks.tool_region(self.contact, beads, "cylinder", fix_id=TOOL_FIX),
+                   tool=blocks.tool_region(self.tool, beads, "cylinder", fix_id=TOOL_FIX),
                    load_id=1, pulled_id=model.n_beads, load_ramp=ramp,
                    load_x=tin[0], load_y=tin[1], pull_x=pull[0], pull_y=pull[1],
                    ramp_time=tr, displacement=load.lammps_displacement("tp"),

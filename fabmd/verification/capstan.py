@@ -40,8 +40,9 @@ def from_settings(settings: dict[str, float], friction: float, wrap_angle_rad: f
     material = FibreMaterial(get("modulus_pa", MODULUS_PA),
                              get("density_kg_m3", GLASS.density_kg_m3), "glass, softened")
     fibre = VirtualFibre.solid(material, get("diameter_m", 0.1e-3))
-    return Capstan(fibre=fibre, friction=friction, wrap_angle_rad=wrap_angle_rad,
-                   tool=ToolContact(stiffness_factor=get("tool_stiffness_factor", 0.1)),
+    return Capstan(fibre=fibre, wrap_angle_rad=wrap_angle_rad,
+                   tool=ToolContact(friction=friction,
+                                    stiffness_factor=get("tool_stiffness_factor", 0.1)),
                    radius_m=get("radius_m", 0.3e-3), load_strain=get("load_strain", 1e-3),
                    speed_fraction=get("speed_fraction", 0.03),
                    discretisation=Discretisation(spacing_ratio=get("spacing_ratio", 0.5)),
