@@ -29,7 +29,7 @@ BEADS = [bead_parameters(VirtualFibre.solid(GLASS, 0.1e-3))]
     (lambda: ToolContact(friction=-1), "tool_contact.friction must be >= 0, got -1"),
     (lambda: ToolContact(stiffness_factor=-1), "tool_contact.stiffness_factor must be > 0"),
     (lambda: ToolContact(stiffness_n_per_m=0.0), "tool_contact.stiffness_n_per_m must be > 0"),
-    (lambda: ToolContact(damping_ratio=0.0), "tool_contact.damping_ratio must be in (0, 1]"),
+    (lambda: ToolContact(damping_ratio=1.5), "tool_contact.damping_ratio must be in [0, 1]"),
     (lambda: Capstan(tool=ToolContact(friction=-0.2)),
      "tool_contact.friction must be >= 0, got -0.2"),
     (lambda: Capstan(wrap_angle_rad=0.0), "capstan.wrap_angle_rad must be in (0, 6.28319)"),

@@ -149,7 +149,8 @@ class ToolContact:
     linear_history ... damping mass_velocity``, which is the classic ``hooke/history``
     model written in the ``granular`` syntax. The classic keyword itself is not used:
     in LAMMPS 22Jul2025 its wall version loses the tangential spring (a bead dragged
-    slowly on a wall with μ = 0.3 feels Ft/Fn = 0.012; ``granular``: 0.300).
+    slowly on a wall with μ = 0.3 feels Ft/Fn = 0.012; ``granular``: 0.300), and it
+    returns NaN forces when undamped.
 
     Args:
         friction: Coulomb coefficient μ between tool and fibres (>= 0).
@@ -157,9 +158,7 @@ class ToolContact:
             when ``stiffness_n_per_m`` is not given.
         stiffness_n_per_m: explicit normal stiffness k_n [N/m] (> 0).
         tangential_ratio: k_t/k_n (> 0).
-        damping_ratio: normal damping as a fraction of critical, in (0, 1]
-            (LAMMPS 22Jul2025 returns NaN forces from a region wall with zero
-            damping, so 0 is refused).
+        damping_ratio: normal damping as a fraction of critical, in [0, 1].
     """
 
     friction: float = 0.2
@@ -174,8 +173,7 @@ class ToolContact:
         if self.stiffness_n_per_m is not None:
             inputs.positive("tool_contact.stiffness_n_per_m", self.stiffness_n_per_m)
         inputs.positive("tool_contact.tangential_ratio", self.tangential_ratio)
-        inputs.in_range("tool_contact.damping_ratio", self.damping_ratio, 0.0, 1.0,
-                        low_open=True)
+        inputs.in_range("tool_contact.damping_ratio", self.damping_ratio, 0.0, 1.0)
 
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """Normal stiffness k_n [N/m]."""

@@ -93,10 +93,11 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
 def _tool_contact(tool: ToolContact, beads: list[BeadParameters], fix_id: str, group: str,
                   wall_fix: str, where: str, contacts: bool) -> str:
     c = tool.wall_coefficients(beads)
+    # granular's tangential damping is a multiple of the normal one
+    ratio = c["gammat"] / c["gamman"] if c["gamman"] else 0.0
     return render("wall_gran", fix_id=fix_id, group=group, where=where, wall_fix=wall_fix,
                   contacts=" contacts" if contacts else "", kn=c["kn"], kt=c["kt"],
-                  gamman=c["gamman"], tangential_damping=c["gammat"] / c["gamman"],
-                  friction=c["friction"])
+                  gamman=c["gamman"], tangential_damping=ratio, friction=c["friction"])
 
 
 def tool_region(tool: ToolContact, beads: list[BeadParameters], region_id: str,
