@@ -57,6 +57,15 @@ def test_default_stiffness_follows_the_fibre():
     assert delta / b.diameter_m == pytest.approx(0.01 * 0.5 / 0.1)
 
 
+def test_overlap_ratio_of_a_force():
+    b = BEADS[0]
+    f = 0.01 * b.axial_stiffness_n
+    assert ContactModel().overlap_ratio(f, BEADS) == pytest.approx(0.05)
+    hertz = ContactModel(normal="hertz")
+    f_ref = hertz.normal_stiffness_n_per_m(BEADS) * hertz.reference_overlap * b.diameter_m
+    assert hertz.overlap_ratio(f_ref, BEADS) == pytest.approx(hertz.reference_overlap)
+
+
 def test_hertz_matches_hooke_stiffness_at_the_reference_overlap():
     hooke = ContactModel()
     hertz = ContactModel(normal="hertz")

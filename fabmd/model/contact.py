@@ -114,6 +114,19 @@ class ContactModel:
                                   / self.reference_overlap)
         return kn
 
+    def overlap_ratio(self, force_n: float, beads: list[BeadParameters]) -> float:
+        """Overlap/d a static contact force ``force_n`` [N] causes between the smallest beads.
+
+        Hooke: F/k_n/d; Hertz: (F/(K·sqrt(R_eff)))^(2/3)/d with R_eff = d/4. Use it to
+        check a scene's loads against ``overlap_warning`` before running.
+        """
+        force_n = inputs.non_negative("force_n", force_n)
+        d = min(b.diameter_m for b in beads)
+        if self.normal == "hooke":
+            return force_n / self.normal_stiffness_n_per_m(beads) / d
+        k = self.pair_coefficients(beads)["kn"] * math.sqrt(d / 4.0)
+        return (force_n / k) ** (2.0 / 3.0) / d
+
     def pair_style(self) -> str:
         """The cheapest LAMMPS granular style that carries this physics (measured)."""
         if self.normal == "hooke" and self.friction == 0.0:
