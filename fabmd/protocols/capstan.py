@@ -261,11 +261,12 @@ class CapstanResult:
         write_csv(self.run_dir / "curve.csv", self.curve)
         write_json(self.run_dir / "summary.json", self.summary)
         c, s = self.curve, self.summary
+        pulling = c["displacement_m"] > 0  # the load has ramped up
+        u = 1e3 * c["displacement_m"][pulling]
         plot_curves(self.run_dir / "curve.png", [
-            {"x": 1e3 * c["displacement_m"], "y": c["ratio"], "label": "T_out / T_in"},
-            {"x": 1e3 * c["displacement_m"], "y": np.full_like(c["ratio"],
-                                                               s["expected_ratio"]),
-             "label": "exp(μθ)", "style": ":"},
+            {"x": u, "y": c["ratio"][pulling], "label": "T_out / T_in"},
+            {"x": u, "y": np.full_like(u, s["expected_ratio"]), "label": "exp(μθ)",
+             "style": ":"},
         ], "pulled-end displacement [mm]", "T_out / T_in",
             title=f"Capstan, μ = {s['mu']:g}, θ = {math.degrees(s['theta_rad']):.0f}°",
             notes=f"measured {s['measured_ratio']:.4f}\nexpected {s['expected_ratio']:.4f}\n"
