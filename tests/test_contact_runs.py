@@ -122,10 +122,17 @@ def test_runaway_overlap_stops_the_run(tmp_path):
     assert err.value.cause == "overlap" and "overlap" in str(err.value)
 
 
-def test_tool_overlap_is_reported(tmp_path):
+@pytest.mark.parametrize("kind", ["plane", "region"])
+def test_tool_overlap_is_reported(tmp_path, kind):
+    """Beads 0.05 d into a wall (LAMMPS 22Jul2025: contacts columns 5-7 = contact point)."""
     model = fibres([along_x(3, z=0.45 * D)])
-    wall = blocks.tool_plane(ToolContact(), [B], "z", lo_m=0.0, fix_id="floor")
-    run_dir = run_scene(tmp_path / "d", model, None, wall, 2, tools=("floor",),
+    if kind == "plane":
+        wall = blocks.tool_plane(ToolContact(), [B], "z", lo_m=0.0, fix_id="floor")
+    else:  # a cylinder along x under the fibre, touching it along its length
+        radius = 2 * D
+        wall = (f"region drum cylinder x 0.0 {-radius:.10g} {radius:.10g} INF INF side out\n"
+                + blocks.tool_region(ToolContact(), [B], "drum", fix_id="floor"))
+    run_dir = run_scene(tmp_path / kind, model, None, wall, 2, tools=("floor",),
                         pair_text=render("contact_none"))
     s = overlap_summary(run_dir, None, warn=False)
     assert s["max_tool_overlap_ratio"] == pytest.approx(0.05, rel=1e-6)

@@ -73,7 +73,8 @@ class Sliding:
 
     def __post_init__(self):
         inputs.in_range("sliding.load_strain", self.load_strain, 0.0, 0.01, low_open=True)
-        inputs.positive_int("sliding.periods", self.periods)
+        object.__setattr__(self, "periods", inputs.positive_int("sliding.periods",
+                                                                self.periods))
         inputs.in_range("sliding.speed_fraction", self.speed_fraction, 0.0, 0.5,
                         low_open=True)
         inputs.non_negative("sliding.ramp_periods", self.ramp_periods)
