@@ -12,6 +12,10 @@ prints its message as one line. The subclasses say where it came from:
 * :class:`UnstableRun` — the run was stopped by fabmd's stability guard; names
   the likely cause and the remedy.
 * :class:`OutputExists` — a results folder would be overwritten.
+
+Warnings (Python ``warnings``, not errors): :class:`OverlapWarning` — beads of
+different fibres (or a bead and a tool) overlapped more than the contact model's
+stated limit; the results may be soft.
 """
 
 from __future__ import annotations
@@ -64,3 +68,7 @@ class UnstableRun(SimulationFailed):
         self.cause = cause
         self.step = step
         super().__init__(message, run_dir=run_dir, lammps_error=lammps_error)
+
+
+class OverlapWarning(UserWarning):
+    """A run saw overlaps above ``ContactModel.overlap_warning`` (results may be too soft)."""

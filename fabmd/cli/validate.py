@@ -9,6 +9,8 @@ from .common import add_run_options, emit, engine_from
 #: check name -> module in fabmd.verification
 CHECKS = {
     "fibre-tension": "fibre_tension",
+    "capstan": "capstan",
+    "sliding": "sliding",
 }
 
 

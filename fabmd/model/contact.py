@@ -7,8 +7,29 @@ fraction of critical, and a history-dependent tangential spring capped by
 Coulomb friction μ·F_n. Tools (walls, punch, die, clamps) have their own μ.
 
 Default normal stiffness: k_n = stiffness_factor × E·A/l0 of the stiffest
-virtual fibre, so that overlaps stay a small fraction of the bead diameter at
-the forces a fibre carries (a run reports the largest overlap it saw).
+virtual fibre. A contact force F then overlaps the beads by
+
+    δ/d = (F / E·A) · (s/d) / stiffness_factor,
+
+so overlaps scale with the fibre strain the same force would cause; with the
+defaults (0.1, s/d = 0.5) a bead contact carrying 1 % of E·A overlaps 5 % of d.
+The stiffer the contact, the smaller the time step: the bound in
+:mod:`fabmd.model.beads` adds 6·k_n to the 4·k of the bonds, so factor 0.1 costs
+7 % of the time step, factor 1 costs 37 %. Every run with contact reports the
+largest overlap it saw (:func:`fabmd.scene.blocks.overlap_monitor`), warns past
+``overlap_warning`` and stops past ``overlap_limit``.
+
+Pair style (measured, ``benchmarks/RESULTS.md``, section "Pair styles"): on the
+same 12,200 beads ``gran/hooke/history`` computes the same forces as ``pair_style
+granular`` (hooke + linear_history, to 5e-16) at 1/3.4 of the pair time and 1/2.5 of
+the loop time, and it has an OpenMP version; ``gran/hooke`` (no tangential history)
+is cheaper again but carries no Coulomb friction. So :meth:`ContactModel.pair_style`
+picks ``gran/hooke`` for frictionless Hooke contact, else ``gran/hooke/history`` or
+``gran/hertz/history``.
+
+Bead chains are bumpy: a fibre sliding along another sees F_t/F_n ripple between
+tan(atan μ ∓ asin(s/2d)) and its mean exceed μ by about (1 + μ²)·asin²(s/2d)/3
+(2.3 % at the default s/d = 0.5; section "Bead-chain ripple").
 """
 
 from __future__ import annotations
@@ -17,9 +38,19 @@ import math
 from dataclasses import dataclass
 
 from .. import inputs
+from ..errors import InputError
 from .beads import BeadParameters
 
 NORMAL_MODELS = ("hooke", "hertz")
+
+
+def _normal_stiffness(owner: str, factor: float, explicit: float | None,
+                      beads: list[BeadParameters]) -> float:
+    if explicit is not None:
+        return explicit
+    if not beads:
+        raise InputError(f"{owner}: no bead parameters given to derive the contact stiffness")
+    return factor * max(b.spring_n_per_m for b in beads)
 
 
 @dataclass(frozen=True)
@@ -28,14 +59,19 @@ class ContactModel:
 
     Args:
         friction: Coulomb coefficient μ (>= 0).
-        normal: ``"hooke"`` (linear) or ``"hertz"``.
-        stiffness_factor: k_n over the axial bond spring E·A/l0 (> 0), used
-            when ``stiffness_n_per_m`` is not given.
+        normal: ``"hooke"`` (linear, default) or ``"hertz"``.
+        stiffness_factor: k_n over the axial bond spring E·A/l0 of the stiffest
+            fibre (> 0), used when ``stiffness_n_per_m`` is not given.
         stiffness_n_per_m: explicit linear normal stiffness k_n [N/m] (> 0).
         tangential_ratio: k_t/k_n (> 0; 2/7 is LAMMPS's usual choice).
-        damping_ratio: normal damping as a fraction of critical, in [0, 1].
-        reference_overlap: overlap/d at which a Hertz contact matches k_n, in (0, 0.5].
+        damping_ratio: normal damping as a fraction of critical, in (0, 1]. Undamped
+            contacts chatter and lose their tangential history at each bounce, which
+            lowers friction (capstan on an undamped wall: −11 %; 0.03 is enough).
+        reference_overlap: overlap/d at which a Hertz contact has the stiffness
+            k_n (secant), in (0, 0.5].
         overlap_warning: overlap/d above which a run warns, in (0, 1).
+        overlap_limit: overlap/d at which a run is stopped as unstable
+            (cause "overlap"), in (overlap_warning, 1].
     """
 
     friction: float = 0.3
@@ -46,6 +82,7 @@ class ContactModel:
     damping_ratio: float = 0.3
     reference_overlap: float = 0.05
     overlap_warning: float = 0.1
+    overlap_limit: float = 0.5
 
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
@@ -54,26 +91,58 @@ class ContactModel:
         if self.stiffness_n_per_m is not None:
             inputs.positive("contact.stiffness_n_per_m", self.stiffness_n_per_m)
         inputs.positive("contact.tangential_ratio", self.tangential_ratio)
-        inputs.in_range("contact.damping_ratio", self.damping_ratio, 0.0, 1.0)
+        inputs.in_range("contact.damping_ratio", self.damping_ratio, 0.0, 1.0, low_open=True)
         inputs.in_range("contact.reference_overlap", self.reference_overlap, 0.0, 0.5,
                         low_open=True)
         inputs.in_range("contact.overlap_warning", self.overlap_warning, 0.0, 1.0,
                         low_open=True, high_open=True)
+        inputs.in_range("contact.overlap_limit", self.overlap_limit, self.overlap_warning,
+                        1.0, low_open=True)
 
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
-        """Linear(ised) normal stiffness k_n [N/m]."""
-        if self.stiffness_n_per_m is not None:
-            return self.stiffness_n_per_m
-        return self.stiffness_factor * max(b.spring_n_per_m for b in beads)
+        """Linear(ised) normal stiffness k_n [N/m] (Hertz: secant at the reference overlap)."""
+        return _normal_stiffness("contact", self.stiffness_factor, self.stiffness_n_per_m,
+                                 beads)
+
+    def stability_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
+        """Highest tangent normal stiffness expected [N/m], for the stable time step.
+
+        Hooke: k_n. Hertz (F ∝ δ^1.5): the tangent 1.5·k_n·sqrt(δ/δ_ref) at the
+        warning overlap.
+        """
+        kn = self.normal_stiffness_n_per_m(beads)
+        if self.normal == "hertz":
+            kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
+                                  / self.reference_overlap)
+        return kn
+
+    def overlap_ratio(self, force_n: float, beads: list[BeadParameters]) -> float:
+        """Overlap/d a static contact force ``force_n`` [N] causes between the smallest beads.
+
+        Hooke: F/k_n/d; Hertz: (F/(K·sqrt(R_eff)))^(2/3)/d with R_eff = d/4. Use it to
+        check a scene's loads against ``overlap_warning`` before running.
+        """
+        force_n = inputs.non_negative("force_n", force_n)
+        d = min(b.diameter_m for b in beads)
+        if self.normal == "hooke":
+            return force_n / self.normal_stiffness_n_per_m(beads) / d
+        k = self.pair_coefficients(beads)["kn"] * math.sqrt(d / 4.0)
+        return (force_n / k) ** (2.0 / 3.0) / d
 
     def pair_style(self) -> str:
-        """The cheapest LAMMPS granular style that carries this physics."""
+        """The cheapest LAMMPS granular style that carries this physics (measured)."""
+        if self.normal == "hooke" and self.friction == 0.0:
+            return "gran/hooke"  # no tangential force: no history to store
         return f"gran/{self.normal}/history"
 
     def pair_coefficients(self, beads: list[BeadParameters]) -> dict[str, float]:
-        """``Kn Kt gamman gammat xmu`` for ``pair_style gran/<normal>/history``.
+        """``Kn Kt gamman gammat xmu`` for :meth:`pair_style`.
 
         Damping is set from the lightest bead (highest critical damping rate).
+        LAMMPS multiplies Kn, Kt and both dampings of a Hertz contact by
+        sqrt(δ·R_eff); they are divided here by that factor at the reference
+        overlap of the smallest pair (R_eff = d/4), so that k_n is the secant
+        stiffness there.
         """
         kn = self.normal_stiffness_n_per_m(beads)
         m_eff = 0.5 * min(b.mass_kg for b in beads)
@@ -88,30 +157,53 @@ class ContactModel:
 
 @dataclass(frozen=True)
 class ToolContact:
-    """Contact between fibres and a rigid tool (wall, punch, die, blank holder).
+    """Contact between fibres and a rigid tool (wall, cylinder, punch, die, clamp).
+
+    Linear (Hooke) normal spring, tangential spring with history capped by
+    Coulomb friction μ·F_n: ``fix wall/gran[/region] granular hooke ... tangential
+    linear_history ... damping mass_velocity``, which is the classic ``hooke/history``
+    model written in the ``granular`` syntax. The classic keyword itself is not used:
+    in LAMMPS 22Jul2025 its wall version loses the tangential spring (a bead dragged
+    slowly on a wall with μ = 0.3 feels Ft/Fn = 0.012; ``granular``: 0.300), and it
+    returns NaN forces when undamped.
 
     Args:
         friction: Coulomb coefficient μ between tool and fibres (>= 0).
-        stiffness_factor: k_n over E·A/l0 of the stiffest fibre (> 0).
-        damping_ratio: normal damping as a fraction of critical, in [0, 1].
+        stiffness_factor: k_n over E·A/l0 of the stiffest fibre (> 0), used
+            when ``stiffness_n_per_m`` is not given.
+        stiffness_n_per_m: explicit normal stiffness k_n [N/m] (> 0).
+        tangential_ratio: k_t/k_n (> 0).
+        damping_ratio: normal damping as a fraction of critical, in (0, 1] (see
+            :class:`ContactModel`: undamped contacts chatter and lose friction).
     """
 
     friction: float = 0.2
     stiffness_factor: float = 0.1
+    stiffness_n_per_m: float | None = None
+    tangential_ratio: float = 2.0 / 7.0
     damping_ratio: float = 0.3
 
     def __post_init__(self):
         inputs.non_negative("tool_contact.friction", self.friction)
         inputs.positive("tool_contact.stiffness_factor", self.stiffness_factor)
-        inputs.in_range("tool_contact.damping_ratio", self.damping_ratio, 0.0, 1.0)
+        if self.stiffness_n_per_m is not None:
+            inputs.positive("tool_contact.stiffness_n_per_m", self.stiffness_n_per_m)
+        inputs.positive("tool_contact.tangential_ratio", self.tangential_ratio)
+        inputs.in_range("tool_contact.damping_ratio", self.damping_ratio, 0.0, 1.0,
+                        low_open=True)
 
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
-        return self.stiffness_factor * max(b.spring_n_per_m for b in beads)
+        """Normal stiffness k_n [N/m]."""
+        return _normal_stiffness("tool_contact", self.stiffness_factor,
+                                 self.stiffness_n_per_m, beads)
 
     def wall_coefficients(self, beads: list[BeadParameters]) -> dict[str, float]:
-        """``Kn Kt gamman gammat xmu`` for ``fix wall/gran hooke/history`` (wall mass infinite)."""
+        """k_n [N/m], k_t [N/m], damping rates γ_n, γ_t [1/s] (force = m·γ·v) and μ.
+
+        The wall's mass is infinite, so m_eff is the bead mass (the lightest bead's).
+        """
         kn = self.normal_stiffness_n_per_m(beads)
         m = min(b.mass_kg for b in beads)
         gamma_n = self.damping_ratio * 2.0 * math.sqrt(kn / m)
-        return {"kn": kn, "kt": 2.0 / 7.0 * kn, "gamman": gamma_n, "gammat": 0.5 * gamma_n,
-                "friction": self.friction}
+        return {"kn": kn, "kt": self.tangential_ratio * kn, "gamman": gamma_n,
+                "gammat": 0.5 * gamma_n, "friction": self.friction}

@@ -6,14 +6,18 @@ import dataclasses
 import enum
 import math
 import shlex
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..engine import Engine, EngineResult, mpi
 from ..engine.standalone import command_line
+from ..errors import OverlapWarning
 from ..model.bead_model import BeadModel
-from ..results.folder import prepare_run_folder, write_json
+from ..model.contact import ContactModel
+from ..results.folder import prepare_run_folder, read_print_file, write_json
+from ..scene.blocks import OVERLAP_FILE, TOOL_OVERLAP_WARNING
 
 DATA_FILE = "model.data"
 
@@ -82,3 +86,35 @@ def resume_folder(out: Path | None) -> Path:
 def run_folder(engine: Engine, run_dir: Path, protocol: str) -> EngineResult:
     """Run the protocol's input in ``run_dir`` with ``engine``."""
     return engine.run(run_dir, input_name(protocol), label=protocol)
+
+
+def overlap_summary(run_dir: Path, contact_model: ContactModel | None = None,
+                    file: str = OVERLAP_FILE, warn: bool = True) -> dict:
+    """Largest overlaps a run saw, from the file :func:`fabmd.scene.blocks.overlap_monitor` wrote.
+
+    Returns ``max_overlap_ratio`` (overlap/d, fibre–fibre and tool), its two parts, the
+    warning threshold and a ``warnings`` list (empty when all is well); issues an
+    :class:`fabmd.errors.OverlapWarning` past ``contact_model.overlap_warning`` (rank 0).
+    Empty dict when the run had no monitor. Call it on rank 0 (where the file is read).
+    """
+    path = Path(run_dir) / file
+    if not path.exists():
+        return {}
+    raw = read_print_file(path)
+    threshold = contact_model.overlap_warning if contact_model else TOOL_OVERLAP_WARNING
+    pair = raw["pair_overlap_ratio"]
+    tool = raw["tool_overlap_ratio"]
+    worst_pair = float(pair.max()) if pair.size else 0.0
+    worst_tool = float(tool.max()) if tool.size else 0.0
+    worst = max(worst_pair, worst_tool)
+    messages = []
+    if worst > threshold:
+        step = int(raw["step"][np.argmax(np.maximum(pair, tool))])
+        messages.append(f"largest overlap {worst:.3g} d (step {step}) is above the warning "
+                        f"limit {threshold:g} d: contact too soft for these loads; raise the "
+                        f"contact stiffness_factor or load less")
+        if warn and mpi.is_root():
+            warnings.warn(messages[-1], OverlapWarning, stacklevel=2)
+    return {"max_overlap_ratio": worst, "max_pair_overlap_ratio": worst_pair,
+            "max_tool_overlap_ratio": worst_tool, "overlap_warning_ratio": threshold,
+            "overlap_samples": int(pair.size), "warnings": messages}

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
-from ..model.contact import ContactModel
+from ..model.contact import ContactModel, ToolContact
 from .templates import fmt, render
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
@@ -15,6 +17,12 @@ SKIN_FRACTION = 0.2
 SPEED_FRACTION = 0.1
 #: a bond longer than this multiple of the longest rest length is running away
 BOND_RUNAWAY = 1.5
+#: the file the overlap monitor writes into the run folder
+OVERLAP_FILE = "overlap.dat"
+#: overlap/d that stops a run with tool contact only (no ContactModel to say)
+TOOL_OVERLAP_LIMIT = 0.5
+#: overlap/d above which a run with tool contact only warns
+TOOL_OVERLAP_WARNING = 0.1
 
 
 def boundary_text(model: BeadModel) -> str:
@@ -95,3 +103,88 @@ def relax(model: BeadModel, time_step_s: float, held: str, free: str, quasi_stat
     return render("relax", held=held, free=free, damping_ratio=damping_ratio, drag=drag,
                   monitors=quasi_static.monitors(free, reference_force_n, reference_energy_j),
                   check_every=quasi_static.check_every, max_steps=quasi_static.max_steps)
+
+
+def _tool_contact(tool: ToolContact, beads: list[BeadParameters], fix_id: str, group: str,
+                  wall_fix: str, where: str, contacts: bool) -> str:
+    c = tool.wall_coefficients(beads)
+    # granular's tangential damping is a multiple of the normal one
+    ratio = c["gammat"] / c["gamman"] if c["gamman"] else 0.0
+    return render("wall_gran", fix_id=fix_id, group=group, where=where, wall_fix=wall_fix,
+                  contacts=" contacts" if contacts else "", kn=c["kn"], kt=c["kt"],
+                  gamman=c["gamman"], tangential_damping=ratio, friction=c["friction"])
+
+
+def tool_region(tool: ToolContact, beads: list[BeadParameters], region_id: str,
+                fix_id: str = "tool", group: str = "all", contacts: bool = True) -> str:
+    """Fibres in ``group`` touch the surface of LAMMPS region ``region_id`` (defined before).
+
+    ``fix <fix_id> <group> wall/gran/region granular hooke ... region <region_id>``; the
+    region may move (``region ... move``) and its velocity enters the friction.
+    ``contacts`` keeps the per-bead contact array that :func:`overlap_monitor` reads.
+    """
+    return _tool_contact(tool, beads, fix_id, group, "wall/gran/region", f"region {region_id}",
+                         contacts)
+
+
+def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
+               lo_m: float | None = None, hi_m: float | None = None, fix_id: str = "tool",
+               group: str = "all", contacts: bool = True) -> str:
+    """Flat walls normal to ``axis`` at ``lo_m`` and/or ``hi_m`` [m] (``fix wall/gran``)."""
+    if axis not in ("x", "y", "z"):
+        raise ValueError(f"axis must be 'x', 'y' or 'z', got {axis!r}")
+    if lo_m is None and hi_m is None:
+        raise ValueError("tool_plane needs lo_m or hi_m")
+    where = f"{axis}plane {'NULL' if lo_m is None else fmt(float(lo_m))} " \
+            f"{'NULL' if hi_m is None else fmt(float(hi_m))}"
+    return _tool_contact(tool, beads, fix_id, group, "wall/gran", where, contacts)
+
+
+def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
+                    beads: list[BeadParameters], every: int = 100,
+                    tool_fixes: tuple[str, ...] = (), file: str = OVERLAP_FILE) -> str:
+    """Largest overlap/d between beads of different fibres (and with tools), every ``every`` steps.
+
+    Fibre–fibre pairs: with one bead diameter d in the model, overlap/d = 1 − r_min/d over
+    pairs in contact (exact); with several, the overlap follows from the largest normal
+    contact force through k_n and is divided by the smallest diameter (an upper bound).
+    Tools: the fixes named in ``tool_fixes`` must be ``fix wall/gran[/region] ... contacts``
+    (:func:`tool_region`, :func:`tool_plane`); overlap/d = (r − distance to the contact
+    point)/(2r). Writes ``step pair_overlap_ratio tool_overlap_ratio`` to ``file`` for
+    :func:`fabmd.protocols.common.overlap_summary` and stops the run (``guard_overlap``,
+    cause "overlap") past ``contact_model.overlap_limit``. Costs one occasional neighbour
+    list per sample.
+    """
+    pair = contact_model is not None
+    if not pair and not tool_fixes:
+        return "# no contact in this scene: no overlap monitor"
+    if pair:
+        d_min = float(model.diameters.min())
+        if np.ptp(model.diameters) <= 1e-9 * d_min:
+            pair_lines = render("overlap_pair_distance", diameter=d_min)
+        else:
+            c = contact_model.pair_coefficients(beads)
+            if contact_model.normal == "hooke":
+                formula = f"c_fabmd_contact_fmax/{fmt(c['kn'])}"
+                text = "F/k_n"
+            else:  # F = Kn sqrt(R_eff) delta^1.5; the smallest R_eff gives the largest delta
+                root = c["kn"] * math.sqrt(d_min / 4.0)
+                formula = f"(c_fabmd_contact_fmax/{fmt(root)})^(2.0/3.0)"
+                text = "(F/(K_n sqrt(R_eff)))^(2/3)"
+            pair_lines = render("overlap_pair_force", force_to_overlap=text,
+                                overlap_formula=formula, diameter=d_min)
+    else:
+        pair_lines = "variable        fabmd_pair_overlap equal 0.0"
+    tool_lines = [render("overlap_tool", fix_id=f) for f in tool_fixes]
+    tool_overlap = "0.0"
+    for f in tool_fixes:
+        c = f"c_fabmd_tool_max_{f}"
+        tool_overlap = c if tool_overlap == "0.0" else \
+            f"ternary({c}>{tool_overlap},{c},{tool_overlap})"
+    tool_lines.append(f'variable        fabmd_tool_overlap equal "{tool_overlap}"')
+    warning = contact_model.overlap_warning if pair else TOOL_OVERLAP_WARNING
+    limit = contact_model.overlap_limit if pair else TOOL_OVERLAP_LIMIT
+    return render("overlap_monitor", every=int(every), file=file, warning=warning, limit=limit,
+                  pair_lines=pair_lines, tool_lines="\n".join(tool_lines),
+                  overlap="ternary(v_fabmd_pair_overlap>v_fabmd_tool_overlap,"
+                          "v_fabmd_pair_overlap,v_fabmd_tool_overlap)")

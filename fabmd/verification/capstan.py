@@ -1,0 +1,81 @@
+"""``fabmd validate capstan``: T_out/T_in against exp(μθ) for μ ∈ {0.1, 0.3}, θ ∈ {π/2, π}.
+
+The fibre is softened to E = 1 GPa: at a fixed load strain T_in/(E·A) the ratio
+does not depend on E (only the number of steps grows, as sqrt(E)), and the four
+cases then run in seconds.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..engine import Engine, mpi
+from ..protocols.capstan import Capstan
+from ..results.folder import prepare_run_folder
+
+TOLERANCE = 0.05
+FRICTIONS = (0.1, 0.3)
+WRAP_ANGLES = (math.pi / 2, math.pi)
+#: the softened modulus of the check [Pa] (the ratio is independent of E)
+MODULUS_PA = 1e9
+
+#: settings ``--set KEY=VALUE`` may change
+SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "spacing_ratio", "radius_m",
+            "load_strain", "speed_fraction", "tool_stiffness_factor", "time_step_factor")
+
+
+def from_settings(settings: dict[str, float], friction: float, wrap_angle_rad: float) -> Capstan:
+    """A :class:`Capstan` case with some defaults replaced (SI values)."""
+    from ..errors import InputError
+    from ..model.beads import Discretisation, TimeStep
+    from ..model.contact import ToolContact
+    from ..model.material import GLASS, FibreMaterial, VirtualFibre
+
+    unknown = set(settings) - set(SETTINGS)
+    if unknown:
+        raise InputError(f"unknown setting(s) {sorted(unknown)} for capstan; "
+                         f"allowed: {', '.join(SETTINGS)}")
+    get = settings.get
+    material = FibreMaterial(get("modulus_pa", MODULUS_PA),
+                             get("density_kg_m3", GLASS.density_kg_m3), "glass, softened")
+    fibre = VirtualFibre.solid(material, get("diameter_m", 0.1e-3))
+    return Capstan(fibre=fibre, wrap_angle_rad=wrap_angle_rad,
+                   tool=ToolContact(friction=friction,
+                                    stiffness_factor=get("tool_stiffness_factor", 0.1)),
+                   radius_m=get("radius_m", 0.3e-3), load_strain=get("load_strain", 1e-3),
+                   speed_fraction=get("speed_fraction", 0.03),
+                   discretisation=Discretisation(spacing_ratio=get("spacing_ratio", 0.5)),
+                   time_step=TimeStep(factor=get("time_step_factor", 0.25)))
+
+
+def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool = False,
+          settings: dict[str, float] | None = None) -> dict:
+    """Run the four capstan cases; each ratio must be within 5 % of exp(μθ)."""
+    settings = settings or {}
+    tests = [from_settings(settings, mu, theta) for mu in FRICTIONS for theta in WRAP_ANGLES]
+    engine = engine or Engine()
+    root = prepare_run_folder(out, overwrite=overwrite, prefix="capstan")
+    cases, wall = [], 0.0
+    for test in tests:
+        name = f"mu{test.friction:g}-theta{math.degrees(test.wrap_angle_rad):.0f}"
+        s = test.run(out=root / name, engine=engine).summary
+        wall += s.get("wall_s", 0.0)
+        cases.append({"mu": test.friction, "theta_rad": test.wrap_angle_rad,
+                      "expected_ratio": s["expected_ratio"],
+                      "measured_ratio": s["measured_ratio"], "rel_error": s["rel_error"],
+                      "ratio_std": s["ratio_std"], "max_overlap_ratio": s["max_overlap_ratio"],
+                      "n_beads": s["n_beads"], "steps": s["steps"]})
+    worst = max(c["rel_error"] for c in cases)
+    result = {
+        "check": "capstan",
+        "closed_form": "T_out/T_in = exp(mu*theta)",
+        "modulus_pa": tests[0].fibre.material.modulus_pa,
+        "tolerance": TOLERANCE,
+        "max_rel_error": worst,
+        "passed": worst <= TOLERANCE,
+        "wall_s": wall,
+        "run_dir": str(root),
+        "cases": cases,
+    }
+    return mpi.bcast_json(result)
