@@ -107,6 +107,16 @@ class YarnPath:
         slope = np.where(level, 0.0, dz_total * 0.5 * np.pi / span * np.sin(np.pi * tau))
         return z, slope
 
+    def junctions(self) -> np.ndarray:
+        """Positions in [0, length] where a level stretch meets a transition [m]."""
+        if self.straight:
+            return np.zeros(0)
+        ext_n, _, ext_p = self._ext
+        base = np.mod(np.concatenate([ext_n - ext_p, ext_n + ext_p]), self.period_m)
+        reps = np.arange(int(math.ceil(self.length_m / self.period_m)) + 1) * self.period_m
+        allu = (base[None, :] + reps[:, None]).ravel()
+        return np.unique(allu[(allu > 0) & (allu < self.length_m)])
+
     def max_curvature(self, samples_per_period: int = 4000) -> float:
         """Largest curvature of the centreline [1/m] (0 for a straight yarn)."""
         if self.straight:
@@ -179,7 +189,9 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
     offsets = np.asarray(offsets, float).reshape(-1, 2)
     step = spacing_m / 4.0
     m = max(8, int(math.ceil(path.length_m / step)))
-    u = np.linspace(0.0, path.length_m, m + 1)
+    # the slope is continuous but the curvature jumps where level stretches meet
+    # transitions: grid points there keep the arc-length interpolation exact
+    u = np.union1d(np.linspace(0.0, path.length_m, m + 1), path.junctions())
     z, slope = path.profile(u)
     norm = np.sqrt(1.0 + slope * slope)
     nx, nz = -slope / norm, 1.0 / norm  # in-plane normal (along, z)
@@ -209,9 +221,44 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
             targets = np.arange(int(math.floor(total / spacing_m + 1e-9)) + 1) * chord
             if len(targets) < 2:
                 raise InputError(f"yarn {path.name} is shorter than one bead spacing")
-        ub = np.interp(targets, sigma, u)
-        zb, sb = path.profile(ub)
-        nb = np.sqrt(1.0 + sb * sb)
-        pos = path._place(ub - through * sb / nb, np.full_like(ub, across), zb + through / nb)
+
+        def place(tg: np.ndarray, sigma=sigma, across=across, through=through) -> np.ndarray:
+            ub = np.interp(tg, sigma, u)
+            zb, sb = path.profile(ub)
+            nb = np.sqrt(1.0 + sb * sb)
+            return path._place(ub - through * sb / nb, np.full_like(ub, across),
+                               zb + through / nb)
+
+        pos = place(targets)
+        for _ in range(REFINE_STEPS):  # make every chord the same length
+            closing = pos[:1] + _period_shift(path) if periodic else pos[:0]
+            chords = np.linalg.norm(np.diff(np.vstack([pos, closing]), axis=0), axis=1)
+            if periodic:
+                chord = float(chords.mean())
+            step_sigma = np.diff(np.append(targets, total if periodic else targets[-1:]))
+            if not periodic:
+                step_sigma = step_sigma[:-1]
+            step_sigma *= chord / chords
+            if periodic:
+                step_sigma *= total / step_sigma.sum()
+                targets = np.concatenate([[0.0], np.cumsum(step_sigma[:-1])])
+            else:
+                targets = np.concatenate([[0.0], np.cumsum(step_sigma)])
+                targets = targets[targets <= total * (1 + 1e-12)]
+            pos = place(targets)
+        if periodic:
+            closing = pos[:1] + _period_shift(path)
+            chord = float(np.linalg.norm(np.diff(np.vstack([pos, closing]), axis=0),
+                                         axis=1).mean())
         out.append(FibreBeads(pos, chord))
     return out
+
+
+#: fixed-point passes that equalise chord lengths after placement by arc length
+REFINE_STEPS = 3
+
+
+def _period_shift(path: YarnPath) -> np.ndarray:
+    shift = np.zeros((1, 3))
+    shift[0, path.axis] = path.length_m
+    return shift

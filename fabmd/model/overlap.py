@@ -75,6 +75,13 @@ def closest_approach(positions: np.ndarray, diameters: np.ndarray, groups: np.nd
     spos, sdiam, sgrp = pos[order], diam[order], grp[order]
     total_cells = int(ncell.prod())
     cell_start = np.searchsorted(skey, np.arange(total_cells + 1))
+    # smallest and largest group in each cell: a neighbour cell holding only the bead's
+    # own group cannot contribute a pair and is skipped before pairs are formed
+    occupied = np.flatnonzero(cell_start[1:] > cell_start[:-1])
+    gmin = np.zeros(total_cells, sgrp.dtype)
+    gmax = np.zeros(total_cells, sgrp.dtype)
+    gmin[occupied] = np.minimum.reduceat(sgrp, cell_start[occupied])
+    gmax[occupied] = np.maximum.reduceat(sgrp, cell_start[occupied])
 
     best = (np.inf, -1, -1)
     n_overlap = 0
@@ -89,10 +96,14 @@ def closest_approach(positions: np.ndarray, diameters: np.ndarray, groups: np.nd
                     nc[:, k] = np.mod(nc[:, k], ncell[k])
                 else:
                     valid &= (nc[:, k] >= 0) & (nc[:, k] < ncell[k])
+            nk = (nc[:, 0] * ncell[1] + nc[:, 1]) * ncell[2] + nc[:, 2]
+            nk = np.where(valid, nk, 0)
+            own = sgrp[idx]
+            valid &= ~((gmin[nk] == own) & (gmax[nk] == own))
             ii = idx[valid]
             if not len(ii):
                 continue
-            nk = (nc[valid, 0] * ncell[1] + nc[valid, 1]) * ncell[2] + nc[valid, 2]
+            nk = nk[valid]
             start, stop = cell_start[nk], cell_start[nk + 1]
             if off == (0, 0, 0):
                 start = np.maximum(start, ii + 1)
