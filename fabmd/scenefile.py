@@ -235,6 +235,9 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     factory, arch_keys = ARCHITECTURES[kind]
     _check_keys(fab, tuple(FABRIC_KEYS[1:]) + arch_keys, where, "fabric")
     arch = _build(where, "fabric", factory, **{k: fab.pop(k) for k in arch_keys if k in fab})
+    if isinstance(arch, Architecture3D) and "binder" not in specs:
+        raise InputError(f"{where}: [yarns.binder] is required: the 3D architecture has "
+                         f"{arch.n_binders} binder yarns")
     if "tiling" in fab and isinstance(fab["tiling"], list):
         fab["tiling"] = tuple(fab["tiling"])
     fabric = _build(where, "fabric", Fabric, architecture=arch, warp=specs["warp"],

@@ -15,6 +15,7 @@ Only rank 0 writes.
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,27 @@ from ..model.bead_model import BeadModel
 def _legend(model: BeadModel) -> dict[str, np.ndarray]:
     return {f"family_{name}": np.array([k], dtype=np.int32)
             for k, name in enumerate(model.family_names, start=1)}
+
+
+def _write(path: Path, mesh, field_data: dict[str, np.ndarray]) -> None:
+    """meshio's VTU writer, plus the dataset's FieldData (meshio 5.3 leaves it out)."""
+    import meshio
+
+    path = Path(path)
+    tmp = path.with_name(path.name + ".part")
+    meshio.write(tmp, mesh, file_format="vtu", binary=True)
+    arrays = "".join(
+        f'<DataArray type="Int32" Name="{name}" NumberOfTuples="{len(v)}" format="ascii">'
+        f'{" ".join(str(int(x)) for x in v)}</DataArray>\n' for name, v in field_data.items())
+    block = f"<FieldData>\n{arrays}</FieldData>\n"
+    with open(tmp, "rb") as src, open(path, "wb") as dst:
+        for line in src:
+            dst.write(line)
+            if line.strip() == b"<UnstructuredGrid>":
+                dst.write(block.encode("ascii"))
+                break
+        shutil.copyfileobj(src, dst)
+    tmp.unlink()
 
 
 def _open_bonds(model: BeadModel) -> np.ndarray:
@@ -56,9 +78,8 @@ def write_fibres_vtu(model: BeadModel, path: Path) -> Path | None:
                    "fibre_id": [model.fibre_ids[bonds[:, 0]].astype(np.int32)],
                    "family": [model.atom_types[bonds[:, 0]].astype(np.int32)],
                    "bond_type": [model.bond_types[keep].astype(np.int32)]},
-        field_data=_legend(model),
     )
-    meshio.write(path, mesh, file_format="vtu", binary=True)
+    _write(path, mesh, _legend(model))
     return Path(path)
 
 
@@ -112,7 +133,6 @@ def write_yarns_vtu(model: BeadModel, path: Path) -> Path | None:
         family.append(np.full(m, codes[model.yarns[k].family], np.int32))
     mesh = meshio.Mesh(points=points, cells=[("line", np.vstack(cells))],
                        cell_data={"yarn_id": [np.concatenate(yarn_id)],
-                                  "family": [np.concatenate(family)]},
-                       field_data=_legend(model))
-    meshio.write(path, mesh, file_format="vtu", binary=True)
+                                  "family": [np.concatenate(family)]})
+    _write(path, mesh, _legend(model))
     return Path(path)
