@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -245,3 +246,16 @@ def test_clearance_reported_matches_geometry():
     # inside the section, so the bead gap is at least the requested clearance
     assert m.info["clearance_m"] >= f.clearance_m * (1 - 1e-6)
     assert math.isclose(m.info["requested_clearance_m"], 0.08e-3)
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("example", sorted(
+    (Path(__file__).resolve().parents[1] / "examples").glob("*.toml")), ids=lambda p: p.stem)
+def test_shipped_examples_have_no_overlapping_yarns(example, periodic):
+    from fabmd.scenefile import load_scene
+
+    scene = load_scene(example)
+    fabric = dataclasses.replace(scene.fabric, periodic=periodic)
+    m = render_fabric(fabric, scene.discretisation)  # raises on any overlap
+    assert m.info["clearance_m"] > 0.5 * fabric.clearance_m
+    assert m.periodic[0] == periodic
