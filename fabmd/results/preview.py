@@ -7,7 +7,7 @@ Three panels, beads drawn to scale and coloured by yarn family:
    plane (3D), one unit cell long: the warp/binder paths and the cut wefts;
 3. section along the weft (y–z) through the first weft column.
 
-Large models are thinned (every k-th bead) in the top view. Rank 0 only.
+Large models are thinned (every k-th fibre) in the top view. Rank 0 only.
 """
 
 from __future__ import annotations
@@ -86,10 +86,9 @@ def preview_png(model: BeadModel, path: Path, title: str = "") -> Path | None:
 
     # 1. top view
     idx = np.argsort(pos[:, 2], kind="stable")
-    if len(idx) > TOP_VIEW_BEADS:
-        keep = np.zeros(model.n_beads, bool)
-        keep[::int(np.ceil(model.n_beads / TOP_VIEW_BEADS))] = True
-        idx = idx[keep[idx]]
+    if len(idx) > TOP_VIEW_BEADS:  # thin by whole fibres so the chains stay continuous
+        every = int(np.ceil(model.n_beads / TOP_VIEW_BEADS))
+        idx = idx[(model.fibre_ids[idx] % every) == 0]
     shade = (pos[idx, 2] - z_lo) / max(z_hi - z_lo, 1e-12)
     _draw(ax_top, pos[idx, :2], d[idx], _colours(model, idx, shade))
     lo, hi = pos[:, :2].min(axis=0) - d.max(), pos[:, :2].max(axis=0) + d.max()
