@@ -16,6 +16,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("demo", "run the main job: a small default scene end to end"),
     "validate": ("validate", "physics checks against closed form (fibre-tension, ...)"),
     "info": ("info", "LAMMPS version, packages and what fabmd needs of them"),
+    "build": ("build", "render a fabric scene (TOML) into beads: data file, VTU, preview"),
 }
 
 

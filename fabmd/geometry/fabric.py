@@ -1,0 +1,330 @@
+"""The description of a fabric: architecture, yarns, tiling, periodicity.
+
+Axes: warp (and binder) yarns run along x, weft yarns along y, z is the
+thickness, the fabric's mid-plane is z = 0 and the unit cell starts at x = y = 0.
+
+* 2D weave (:class:`~fabmd.geometry.weave.Weave`, matrix ``(n_warp, n_weft)``):
+  warp *i* lies at y = (i + ½)·warp spacing, weft *j* at x = (j + ½)·weft
+  spacing; unit cell ``n_weft·s_weft × n_warp·s_warp``. At every crossing the
+  two yarns' centrelines are (h_warp + h_weft)/2 + clearance apart, each
+  displaced half of that from the mid-plane (both families crimp).
+* 3D (:class:`~fabmd.geometry.architecture3d.Architecture3D`): straight weft
+  layers and stuffer warps, binders weaving between the gaps; unit cell
+  ``columns·s_weft × dents·s_warp``. Neighbouring weft layers and gap levels
+  are (their heights)/2 + clearance apart; a gap is as high as the tallest yarn
+  that passes through it.
+
+:meth:`Fabric.yarn_paths` gives every yarn centreline of the tile.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import inputs
+from ..errors import InputError
+from ..model.material import FibreMaterial
+from ..units import TEX, quantity
+from .architecture3d import Architecture3D
+from .paths import YarnPath
+from .section import Section
+from .weave import Weave
+
+FAMILIES = ("warp", "weft", "binder")
+#: direction each family runs along (0 = x, 1 = y)
+FAMILY_AXIS = {"warp": 0, "weft": 1, "binder": 0}
+
+
+@dataclass(frozen=True)
+class YarnSpec:
+    """One yarn family.
+
+    Args:
+        linear_density_tex: linear density [tex = g/km] (accepts "1200 tex", "1.2 ktex").
+        material: filament material.
+        width_m: section width in the fabric plane [m] (accepts "2 mm").
+        n_fibres: virtual fibres per yarn (>= 1; 1, 7, 19, 37, 61 are full hexagons).
+        height_m: section height [m]; default = width (circular section).
+        spacing_m: distance between neighbouring yarns of this family [m].
+        count_per_m: or yarns per length [1/m] (accepts "4 ends/cm", "3 picks/cm").
+        name: label of the family's yarn type in outputs.
+    """
+
+    linear_density_tex: float
+    material: FibreMaterial
+    width_m: float
+    n_fibres: int = 7
+    height_m: float | None = None
+    spacing_m: float | None = None
+    count_per_m: float | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        tex = self.linear_density_tex
+        if isinstance(tex, str):
+            tex = quantity(tex, "linear_density", "yarn.linear_density_tex") / TEX
+        object.__setattr__(self, "linear_density_tex",
+                           inputs.positive("yarn.linear_density_tex", tex))
+        if not isinstance(self.material, FibreMaterial):
+            raise InputError(f"yarn.material must be a FibreMaterial, got {self.material!r}")
+        object.__setattr__(self, "n_fibres", inputs.positive_int("yarn.n_fibres", self.n_fibres))
+        section = Section(self.width_m, self.height_m)
+        object.__setattr__(self, "width_m", section.width_m)
+        object.__setattr__(self, "height_m", section.height_m)
+        if self.spacing_m is not None and self.count_per_m is not None:
+            raise InputError("give yarn.spacing_m or yarn.count_per_m, not both")
+        if self.spacing_m is not None:
+            object.__setattr__(self, "spacing_m", inputs.positive(
+                "yarn.spacing_m", quantity(self.spacing_m, "length", "yarn.spacing_m")))
+        if self.count_per_m is not None:
+            count = inputs.positive("yarn.count_per_m", quantity(
+                self.count_per_m, "count_per_length", "yarn.count_per_m"))
+            object.__setattr__(self, "count_per_m", count)
+            object.__setattr__(self, "spacing_m", 1.0 / count)
+
+    @property
+    def section(self) -> Section:
+        return Section(self.width_m, self.height_m)
+
+    @property
+    def linear_density_kg_m(self) -> float:
+        return self.linear_density_tex * TEX
+
+    def packing(self) -> tuple[np.ndarray, float]:
+        """Fibre offsets (n, 2) [m] and contact diameter [m] (see :mod:`.section`)."""
+        return self.section.packing(self.n_fibres)
+
+
+@dataclass(frozen=True)
+class Fabric:
+    """A woven fabric, ready to render into beads.
+
+    Args:
+        architecture: a 2D :class:`Weave` or a 3D :class:`Architecture3D`.
+        warp, weft: yarn families (spacing required).
+        binder: binder yarns (3D only; their spacing is the warp spacing).
+        tiling: unit cells along x (warp direction) and y.
+        periodic: periodic in x and y (every yarn continuous across the boundary).
+        clearance_m: gap left between crossing yarn sections [m]; default 10 %
+            of the smallest yarn height.
+        plateau: fraction of a crossed yarn's half-width over which a crimped
+            yarn stays level, in [0, 1) (0: pure cosine waves).
+    """
+
+    architecture: Weave | Architecture3D
+    warp: YarnSpec
+    weft: YarnSpec
+    binder: YarnSpec | None = None
+    tiling: tuple = (1, 1)
+    periodic: bool = False
+    clearance_m: float | None = None
+    plateau: float = 0.5
+
+    def __post_init__(self):
+        arch = self.architecture
+        if not isinstance(arch, Weave | Architecture3D):
+            raise InputError(f"fabric.architecture must be a Weave or an Architecture3D, "
+                             f"got {type(arch).__name__}")
+        for fam in ("warp", "weft"):
+            spec = getattr(self, fam)
+            if not isinstance(spec, YarnSpec):
+                raise InputError(f"fabric.{fam} must be a YarnSpec, got {spec!r}")
+            if spec.spacing_m is None:
+                raise InputError(f"yarns.{fam} needs spacing_m (or count_per_m)")
+        if self.is_3d:
+            if not isinstance(self.binder, YarnSpec):
+                raise InputError(f"fabric.binder (yarns.binder) is required: the 3D "
+                                 f"architecture has {arch.n_binders} binder yarns")
+            if self.binder.spacing_m is not None and not math.isclose(
+                    self.binder.spacing_m, self.warp.spacing_m, rel_tol=1e-9):
+                raise InputError(f"yarns.binder.spacing_m = {self.binder.spacing_m:g} m must "
+                                 f"equal the warp spacing {self.warp.spacing_m:g} m (one binder "
+                                 f"plane per dent) or be left out")
+        elif self.binder is not None:
+            raise InputError("fabric.binder (yarns.binder) is only used by 3D architectures")
+        tiling = self.tiling
+        if not isinstance(tiling, list | tuple) or len(tiling) != 2:
+            raise InputError(f"fabric.tiling must be two integers [along x, along y], "
+                             f"got {tiling!r}")
+        object.__setattr__(self, "tiling", (inputs.positive_int("fabric.tiling[0]", tiling[0]),
+                                            inputs.positive_int("fabric.tiling[1]", tiling[1])))
+        if not isinstance(self.periodic, bool):
+            raise InputError(f"fabric.periodic must be true or false, got {self.periodic!r}")
+        if self.clearance_m is None:
+            object.__setattr__(self, "clearance_m",
+                               0.1 * min(s.height_m for s in self.specs().values()))
+        else:
+            object.__setattr__(self, "clearance_m", inputs.non_negative(
+                "fabric.clearance_m", quantity(self.clearance_m, "length",
+                                               "fabric.clearance_m")))
+        inputs.in_range("fabric.plateau", self.plateau, 0.0, 1.0, high_open=True)
+        self._check_fit()
+
+    # -- derived -----------------------------------------------------------------------
+    @property
+    def is_3d(self) -> bool:
+        return isinstance(self.architecture, Architecture3D)
+
+    def specs(self) -> dict[str, YarnSpec]:
+        """Yarn spec of every family that has yarns, in family order."""
+        out = {"warp": self.warp, "weft": self.weft}
+        if self.is_3d:
+            if not self.architecture.warp_gaps:
+                del out["warp"]
+            out["binder"] = self.binder
+        return out
+
+    @property
+    def families(self) -> tuple[str, ...]:
+        return tuple(self.specs())
+
+    @property
+    def unit_cell_m(self) -> tuple[float, float]:
+        """Unit-cell size (x, y) [m]."""
+        a = self.architecture
+        if self.is_3d:
+            return a.columns * self.weft.spacing_m, a.dents * self.warp.spacing_m
+        return a.n_weft * self.weft.spacing_m, a.n_warp * self.warp.spacing_m
+
+    @property
+    def size_m(self) -> tuple[float, float]:
+        """Size of the tile (x, y) [m]."""
+        lx, ly = self.unit_cell_m
+        return lx * self.tiling[0], ly * self.tiling[1]
+
+    def spacing(self, family: str) -> float:
+        """Distance between neighbouring yarns of a family [m] (binder: the dent pitch)."""
+        return self.warp.spacing_m if family == "binder" else getattr(self, family).spacing_m
+
+    def yarns_per_unit_cell(self) -> dict[str, int]:
+        a = self.architecture
+        if self.is_3d:
+            counts = {"warp": a.n_warp, "weft": a.n_weft, "binder": a.n_binders}
+        else:
+            counts = {"warp": a.n_warp, "weft": a.n_weft}
+        return {f: n for f, n in counts.items() if n}
+
+    def _check_fit(self) -> None:
+        c = self.clearance_m
+        weft = self.weft
+        if weft.width_m + c > weft.spacing_m * (1 + 1e-12):
+            raise InputError(f"yarns.weft.width_m = {weft.width_m:g} m plus the clearance "
+                             f"{c:g} m does not fit the weft spacing {weft.spacing_m:g} m: "
+                             f"neighbouring weft yarns would overlap; reduce the width or "
+                             f"increase the spacing")
+        if self.is_3d:
+            room = 0.5 * self.warp.spacing_m
+            need = 0.5 * (self.warp.width_m + self.binder.width_m) + c
+            if need > room * (1 + 1e-12):
+                raise InputError(
+                    f"stuffer warps ({self.warp.width_m:g} m wide) and binders "
+                    f"({self.binder.width_m:g} m wide) alternate every half warp spacing "
+                    f"({room:g} m) and need {need:g} m with the clearance: increase "
+                    f"yarns.warp.spacing_m or reduce the widths")
+        elif self.warp.width_m + c > self.warp.spacing_m * (1 + 1e-12):
+            raise InputError(f"yarns.warp.width_m = {self.warp.width_m:g} m plus the clearance "
+                             f"{c:g} m does not fit the warp spacing {self.warp.spacing_m:g} m: "
+                             f"neighbouring warp yarns would overlap; reduce the width or "
+                             f"increase the spacing")
+
+    # -- geometry ------------------------------------------------------------------------
+    def levels(self) -> dict[str, list[float]]:
+        """3D: z of every weft layer (``"weft"``) and gap (``"gap"``) [m]; 2D: crossing offsets."""
+        c = self.clearance_m
+        if not self.is_3d:
+            half = 0.25 * (self.warp.height_m + self.weft.height_m) + 0.5 * c
+            return {"crossing_half_separation": [half]}
+        a = self.architecture
+        binder_gaps = a.binder_gaps()
+        heights = []
+        for g in range(a.n_gaps):
+            h = 0.0
+            if g in a.warp_gaps:
+                h = max(h, self.warp.height_m)
+            if g in binder_gaps:
+                h = max(h, self.binder.height_m)
+            heights.append(h)
+        hf = self.weft.height_m
+        gap_z = [0.0]
+        weft_z = []
+        for k in range(a.weft_layers):
+            weft_z.append(gap_z[k] - 0.5 * (heights[k] + hf) - c)
+            gap_z.append(weft_z[k] - 0.5 * (heights[k + 1] + hf) - c)
+        mid = 0.5 * (gap_z[0] + gap_z[-1])
+        return {"weft": [z - mid for z in weft_z], "gap": [z - mid for z in gap_z],
+                "gap_height": heights}
+
+    def unit_cell_paths(self) -> list[YarnPath]:
+        """Centrelines of the yarns of one unit cell (length = one period)."""
+        lx, ly = self.unit_cell_m
+        f = self.plateau
+        out: list[YarnPath] = []
+        if not self.is_3d:
+            m = self.architecture.array
+            half = self.levels()["crossing_half_separation"][0]
+            sx, sy = self.weft.spacing_m, self.warp.spacing_m
+            weft_u = (np.arange(m.shape[1]) + 0.5) * sx
+            warp_u = (np.arange(m.shape[0]) + 0.5) * sy
+            for i in range(m.shape[0]):
+                out.append(YarnPath(f"warp-{i + 1}", "warp", 0, warp_u[i], lx, lx,
+                                    tuple(weft_u), tuple(np.where(m[i] == 1, half, -half)),
+                                    (f * 0.5 * self.weft.width_m,)))
+            for j in range(m.shape[1]):
+                out.append(YarnPath(f"weft-{j + 1}", "weft", 1, weft_u[j], ly, ly,
+                                    tuple(warp_u), tuple(np.where(m[:, j] == 1, -half, half)),
+                                    (f * 0.5 * self.warp.width_m,)))
+        else:
+            a = self.architecture
+            lev = self.levels()
+            sx, p = self.weft.spacing_m, self.warp.spacing_m
+            cols = (np.arange(a.columns) + 0.5) * sx
+            for d in range(a.dents):
+                for g in a.warp_gaps:
+                    out.append(YarnPath(f"warp-d{d + 1}-g{g}", "warp", 0, (d + 0.25) * p,
+                                        lx, lx, z_m=lev["gap"][g], level=g))
+            for c in range(a.columns):
+                for k in range(a.weft_layers):
+                    out.append(YarnPath(f"weft-c{c + 1}-l{k + 1}", "weft", 1, cols[c], ly, ly,
+                                        z_m=lev["weft"][k], level=k))
+            for d, dent in enumerate(a.binder_paths):
+                for b, path in enumerate(dent):
+                    out.append(YarnPath(f"binder-d{d + 1}-{b + 1}", "binder", 0,
+                                        (d + 0.75) * p, lx, lx, tuple(cols),
+                                        tuple(lev["gap"][g] for g in path),
+                                        (f * 0.5 * self.weft.width_m,), level=min(path)))
+        return [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,
+                         y.node_u_m, y.node_z_m, y.plateau_m, y.z_m, y.level, k)
+                for k, y in enumerate(out)]
+
+    def yarn_paths(self) -> list[YarnPath]:
+        """Every yarn of the tile, ordered by family, then position, then from the top.
+
+        Names are ``<family>-<n>`` numbered from 1 in that order.
+        """
+        lx, ly = self.unit_cell_m
+        nx, ny = self.tiling
+        tiled = []
+        for y in self.unit_cell_paths():
+            if y.axis == 0:
+                copies, step, length = ny, ly, nx * lx
+            else:
+                copies, step, length = nx, lx, ny * ly
+            base = YarnPath(y.name, y.family, y.axis, y.offset_m, length, y.period_m,
+                            y.node_u_m, y.node_z_m, y.plateau_m, y.z_m, y.level, y.cell_index)
+            tiled += [base.translated(y.name, k * step) for k in range(copies)]
+        order = {f: i for i, f in enumerate(FAMILIES)}
+
+        def top(y: YarnPath) -> float:
+            return -(max(y.node_z_m) if y.node_z_m else y.z_m)
+
+        tiled.sort(key=lambda y: (order[y.family], round(y.offset_m, 12),
+                                  y.cell_index if y.family == "binder" else 0, top(y)))
+        count = dict.fromkeys(FAMILIES, 0)
+        named = []
+        for y in tiled:
+            count[y.family] += 1
+            named.append(y.translated(f"{y.family}-{count[y.family]}", 0.0))
+        return named

@@ -1,0 +1,354 @@
+"""Render a :class:`~fabmd.geometry.fabric.Fabric` into a :class:`BeadModel`.
+
+Per yarn family: the section packing gives the fibre offsets and the contact
+(bead) diameter d (:mod:`fabmd.geometry.section`); the filament area of a fibre
+is A = tex·1e-6/ρ/N (:meth:`VirtualFibre.from_yarn`); bead spacing, mass and
+bond coefficient come from :func:`fabmd.model.beads.bead_parameters`.
+
+* Non-periodic fabric: beads exactly l0 = (s/d)·d apart (chord) from the start
+  of each fibre; one bond type per family.
+* Periodic fabric (x and y periodic, z not): each fibre closes on itself across
+  the box with a whole number of bonds, so its rest length is its own length
+  divided by its bond count (within ½ bond of l0). Fibres with equal rest
+  lengths share a bond type; bond types are numbered family by family, so
+  those of one family form a contiguous range.
+
+Identity: atom type = family (order ``warp, weft, binder``, only families
+present), molecule id = fibre id, fibres numbered yarn by yarn and beads
+contiguous along each fibre. :func:`render_fabric` also checks that no two
+beads of different yarns overlap (:mod:`fabmd.model.overlap`) and that no yarn
+bends so tightly that its inner fibres fold, and records facts later stages
+need in ``BeadModel.info`` (see :func:`render_fabric`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry.fabric import FAMILY_AXIS, Fabric
+from ..geometry.paths import YarnPath, fibre_beads
+from .bead_model import AngleType, BeadModel, BondType, Yarn
+from .beads import BeadParameters, Discretisation, bead_parameters
+from .material import VirtualFibre
+from .overlap import ClosestApproach, closest_approach
+
+#: rest lengths closer than this relative difference share a bond type
+REST_LENGTH_TOLERANCE = 1e-9
+#: a yarn folds when curvature × largest fibre offset reaches this
+FOLD_LIMIT = 0.95
+INFO_FORMAT = "fabmd-fabric"
+
+
+@dataclass(frozen=True)
+class FamilyBeads:
+    """What one yarn family becomes: fibre, section packing and bead parameters."""
+
+    family: str
+    fibre: VirtualFibre
+    offsets_m: np.ndarray
+    beads: BeadParameters
+
+    def at_spacing(self, bond_length_m: float, discretisation: Discretisation) -> BeadParameters:
+        return bead_parameters(self.fibre, discretisation, bond_length_m=bond_length_m)
+
+
+def family_beads(fabric: Fabric, discretisation: Discretisation | None = None
+                 ) -> dict[str, FamilyBeads]:
+    """Virtual fibre, fibre offsets and bead parameters of every family present."""
+    disc = discretisation or Discretisation()
+    out = {}
+    for fam, spec in fabric.specs().items():
+        offsets, d = spec.packing()
+        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d)
+        out[fam] = FamilyBeads(fam, fibre, offsets, bead_parameters(fibre, disc))
+    return out
+
+
+def bead_parameter_list(model: BeadModel, fabric: Fabric,
+                        discretisation: Discretisation | None = None) -> list[BeadParameters]:
+    """One :class:`BeadParameters` per bond type of ``model`` (for contact and time step)."""
+    disc = discretisation or Discretisation()
+    fams = family_beads(fabric, disc)
+    return [fams[bt.family].at_spacing(bt.rest_length_m, disc) for bt in model.bond_type_table]
+
+
+def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads]) -> None:
+    seen = set()
+    for path in paths:
+        if path.straight or path.cell_index in seen:
+            continue
+        seen.add(path.cell_index)
+        reach = float(np.abs(fams[path.family].offsets_m[:, 1]).max())
+        kappa = path.max_curvature()
+        if kappa * reach >= FOLD_LIMIT:
+            raise InputError(
+                f"yarn {path.name} bends with radius {1e3 / kappa:.3g} mm, tighter than its "
+                f"fibres reach from its centreline ({1e3 * reach:.3g} mm): its inner fibres "
+                f"would fold; increase the weft spacing, reduce fabric.plateau or the "
+                f"{path.family} height")
+
+
+def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, *,
+                  check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
+    """Beads, bonds and types of ``fabric``.
+
+    Args:
+        fabric: the fabric description.
+        discretisation: bead spacing ratio, mass scaling, bending (defaults if None).
+        check: run the overlap check (raises :class:`InputError` on overlap).
+        pad_fraction: non-periodic box margin around the beads, as a fraction of
+            the fabric size in x and y (z: one fabric thickness on each side).
+
+    ``BeadModel.info`` holds (JSON): ``format``, ``architecture`` (name, kind,
+    matrix or layers/binder paths), ``unit_cell_m`` [x, y], ``tiling``,
+    ``fabric_size_m`` [x, y], ``periodic``, ``yarns_per_unit_cell``,
+    ``yarn_axis`` (family → 0 for x, 1 for y), ``spacing_m`` and
+    ``count_per_m`` per family, ``families`` (per family: tex, n_fibres,
+    width/height, fibre contact diameter, filament area, bond length, E·A,
+    modulus, density), ``yarn_offset_m`` / ``yarn_level`` (per yarn, in yarn
+    order), ``z_levels_m``, ``loose_thickness_m`` and ``z_extent_m`` (bead
+    extent incl. radius), ``crimp`` per family (loose centreline crimp),
+    ``areal_density_kg_m2``, ``clearance_m`` (smallest gap between beads of
+    different yarns; ``None`` if above the search cutoff), ``clearance_pair``
+    (the two yarns), ``requested_clearance_m``, ``bond_types_per_family``,
+    ``build_s`` and ``fabric`` (the description as plain data).
+    """
+    t0 = time.perf_counter()
+    disc = discretisation or Discretisation()
+    fams = family_beads(fabric, disc)
+    families = fabric.families
+    paths = fabric.yarn_paths()
+    _check_folding(paths, fams)
+    periodic = fabric.periodic
+
+    # fibres of each distinct unit-cell yarn, computed once and moved sideways
+    shapes: dict[int, list] = {}
+    per_yarn = []
+    for path in paths:
+        fam = fams[path.family]
+        if path.cell_index not in shapes:
+            base = YarnPath(path.name, path.family, path.axis, 0.0, path.length_m,
+                            path.period_m, path.node_u_m, path.node_z_m, path.plateau_m,
+                            path.z_m, path.level, path.cell_index)
+            shapes[path.cell_index] = fibre_beads(base, fam.offsets_m, fam.beads.bond_length_m,
+                                                  periodic)
+        per_yarn.append(shapes[path.cell_index])
+
+    # bond types: per family, grouped by rest length
+    type_table: list[BondType] = []
+    type_params: list[BeadParameters] = []
+    fibre_type = []
+    for fam_name in families:
+        lengths = sorted({fb.spacing_m for path, fibres in zip(paths, per_yarn, strict=True)
+                          if path.family == fam_name for fb in fibres})
+        groups: list[float] = []
+        for length in lengths:
+            if not groups or length > groups[-1] * (1 + REST_LENGTH_TOLERANCE):
+                groups.append(length)
+        for length in groups:
+            p = fams[fam_name].at_spacing(length, disc)
+            type_table.append(BondType(p.bond_coefficient, length, fam_name, p.axial_stiffness_n))
+            type_params.append(p)
+
+    def type_of(fam_name: str, length: float) -> int:
+        best = min((abs(bt.rest_length_m - length), k) for k, bt in enumerate(type_table)
+                   if bt.family == fam_name)
+        return best[1] + 1
+
+    counts = [len(fb.positions) for fibres in per_yarn for fb in fibres]
+    n = int(sum(counts))
+    pos = np.empty((n, 3))
+    diam = np.empty(n)
+    mass = np.empty(n)
+    atype = np.empty(n, np.int64)
+    fibre_ids = np.empty(n, np.int64)
+    fibre_yarn = []
+    yarns = []
+    cursor = 0
+    fid = 0
+    for yid, (path, fibres) in enumerate(zip(paths, per_yarn, strict=True), start=1):
+        yarns.append(Yarn(path.name, path.family))
+        t = families.index(path.family) + 1
+        shift = np.zeros(3)
+        shift[1 - path.axis] = path.offset_m
+        for fb in fibres:
+            k = len(fb.positions)
+            fid += 1
+            btype = type_of(path.family, fb.spacing_m)
+            fibre_type.append(btype)
+            sl = slice(cursor, cursor + k)
+            pos[sl] = fb.positions + shift
+            diam[sl] = type_params[btype - 1].diameter_m
+            mass[sl] = type_params[btype - 1].mass_kg
+            atype[sl] = t
+            fibre_ids[sl] = fid
+            fibre_yarn.append(yid)
+            cursor += k
+    fibre_type = np.asarray(fibre_type, np.int64)
+
+    # bonds along each fibre (+ closing bonds when periodic)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    ends = starts + np.asarray(counts, np.int64) - 1
+    i = np.flatnonzero(fibre_ids[:-1] == fibre_ids[1:])
+    bonds = np.column_stack([i, i + 1])
+    btypes = fibre_type[fibre_ids[i] - 1]
+    if periodic:
+        bonds = np.vstack([bonds, np.column_stack([ends, starts])])
+        btypes = np.concatenate([btypes, fibre_type])
+
+    angles = np.zeros((0, 3), np.int64)
+    angle_types = np.zeros(0, np.int64)
+    angle_table: list[AngleType] = []
+    if disc.bending_factor > 0:
+        angle_table = [AngleType(p.angle_coefficient, bt.family)
+                       for p, bt in zip(type_params, type_table, strict=True)]
+        j = np.flatnonzero((fibre_ids[:-2] == fibre_ids[1:-1]) & (fibre_ids[1:-1] == fibre_ids[2:]))
+        angles = np.column_stack([j, j + 1, j + 2])
+        if periodic:
+            angles = np.vstack([angles, np.column_stack([ends - 1, ends, starts]),
+                                np.column_stack([ends, starts, starts + 1])])
+        angle_types = fibre_type[fibre_ids[angles[:, 1]] - 1]
+
+    # box, wrapping and image flags
+    size = np.array(fabric.size_m)
+    r = 0.5 * diam
+    z_lo, z_hi = float((pos[:, 2] - r).min()), float((pos[:, 2] + r).max())
+    thickness = z_hi - z_lo
+    images = np.zeros((n, 3), np.int64)
+    if periodic:
+        box_lo = np.array([0.0, 0.0, z_lo - thickness])
+        box_hi = np.array([size[0], size[1], z_hi + thickness])
+        for k in range(2):
+            images[:, k] = np.floor(pos[:, k] / size[k]).astype(np.int64)
+            pos[:, k] -= images[:, k] * size[k]
+    else:
+        pad = pad_fraction * size
+        box_lo = np.array([(pos[:, 0] - r).min() - pad[0], (pos[:, 1] - r).min() - pad[1],
+                           z_lo - thickness])
+        box_hi = np.array([(pos[:, 0] + r).max() + pad[0], (pos[:, 1] + r).max() + pad[1],
+                           z_hi + thickness])
+
+    model = BeadModel(
+        positions=pos, diameters=diam, masses=mass, atom_types=atype, fibre_ids=fibre_ids,
+        bonds=bonds, bond_types=btypes, family_names=families, bond_type_table=type_table,
+        fibre_yarn=np.asarray(fibre_yarn, np.int64), yarns=yarns, box_lo=box_lo, box_hi=box_hi,
+        periodic=(periodic, periodic, False), images=images, angles=angles,
+        angle_types=angle_types, angle_type_table=angle_table)
+
+    approach = None
+    if check:
+        approach = check_overlaps(model, fabric)
+    model.info = fabric_info(fabric, disc, fams, paths, model, approach, thickness,
+                             (z_lo, z_hi))
+    model.info["build_s"] = time.perf_counter() - t0
+    return model
+
+
+def check_overlaps(model: BeadModel, fabric: Fabric | None = None) -> ClosestApproach:
+    """Closest approach between beads of different yarns; raise if any overlap.
+
+    Raises:
+        InputError: naming the two yarns, where, by how much, and what to change.
+    """
+    tol = 1e-6 * float(model.diameters.min())
+    cutoff = float(model.diameters.max()) + 2.0 * max(
+        (fabric.clearance_m if fabric else 0.0), 0.25 * float(model.diameters.max()))
+    for _ in range(3):  # widen the search until some pair of different yarns is seen
+        res = closest_approach(model.positions, model.diameters, model.yarn_ids, model.box_lo,
+                               model.box_hi, model.periodic, cutoff_m=cutoff, tolerance_m=tol)
+        if res.gap_m is not None:
+            break
+        cutoff *= 2.0
+    if res.gap_m is not None and res.gap_m < -tol:
+        ya = model.yarns[model.yarn_ids[res.i] - 1].name
+        yb = model.yarns[model.yarn_ids[res.j] - 1].name
+        where = ", ".join(f"{1e3 * v:.3f}" for v in model.positions[res.i])
+        raise InputError(
+            f"beads of yarns {ya} and {yb} overlap by {1e3 * -res.gap_m:.3g} mm near "
+            f"({where}) mm ({res.overlaps} overlapping bead pairs): increase "
+            f"fabric.clearance_m or the yarn spacing, or reduce yarn heights/widths or "
+            f"fabric.plateau")
+    return res
+
+
+def _centreline_length(path: YarnPath, step: float) -> float:
+    pts = path.centreline(step)
+    return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+
+
+def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBeads],
+                paths: list[YarnPath], model: BeadModel, approach: ClosestApproach | None,
+                thickness: float, z_extent: tuple[float, float]) -> dict:
+    """The JSON-able facts stored in ``BeadModel.info`` (see :func:`render_fabric`)."""
+    from ..protocols.common import scene_dict
+
+    arch = fabric.architecture
+    if fabric.is_3d:
+        arch_info = {"kind": "3d", "name": arch.name, "weft_layers": arch.weft_layers,
+                     "columns": arch.columns, "dents": arch.dents,
+                     "warp_gaps": list(arch.warp_gaps),
+                     "binder_paths": [[list(p) for p in dent] for dent in arch.binder_paths]}
+    else:
+        arch_info = {"kind": "2d", "name": arch.name, "matrix": [list(r) for r in arch.matrix]}
+    size = fabric.size_m
+    crimp: dict[str, float] = {}
+    mass = 0.0
+    for fam, spec in fabric.specs().items():
+        step = 0.25 * fams[fam].beads.bond_length_m
+        shapes = {p.cell_index: p for p in paths if p.family == fam}
+        ratio = []
+        for p in shapes.values():
+            ratio.append(_centreline_length(p, step) / p.length_m)
+        crimp[fam] = float(np.mean(ratio) - 1.0)
+        total = sum(p.length_m for p in paths if p.family == fam) * (1.0 + crimp[fam])
+        mass += spec.linear_density_kg_m * total
+    per_family = {}
+    for fam, fb in fams.items():
+        spec = fabric.specs()[fam]
+        per_family[fam] = {
+            "linear_density_tex": spec.linear_density_tex, "n_fibres": spec.n_fibres,
+            "width_m": spec.width_m, "height_m": spec.height_m,
+            "fibre_diameter_m": fb.fibre.diameter_m, "fibre_area_m2": fb.fibre.area_m2,
+            "bond_length_m": fb.beads.bond_length_m,
+            "axial_stiffness_n": fb.fibre.axial_stiffness_n,
+            "modulus_pa": spec.material.modulus_pa,
+            "density_kg_m3": spec.material.density_kg_m3, "material": spec.material.name,
+            "fill_fraction": spec.section.fill_fraction(spec.n_fibres),
+        }
+    pair = None
+    if approach is not None and approach.i >= 0:
+        pair = [model.yarns[model.yarn_ids[approach.i] - 1].name,
+                model.yarns[model.yarn_ids[approach.j] - 1].name]
+    bt_count = {f: sum(1 for bt in model.bond_type_table if bt.family == f)
+                for f in model.family_names}
+    return {
+        "format": INFO_FORMAT,
+        "architecture": arch_info,
+        "unit_cell_m": list(fabric.unit_cell_m),
+        "tiling": list(fabric.tiling),
+        "fabric_size_m": list(size),
+        "periodic": fabric.periodic,
+        "yarns_per_unit_cell": fabric.yarns_per_unit_cell(),
+        "yarn_axis": {f: FAMILY_AXIS[f] for f in model.family_names},
+        "spacing_m": {f: fabric.spacing(f) for f in model.family_names},
+        "count_per_m": {f: 1.0 / fabric.spacing(f) for f in model.family_names},
+        "families": per_family,
+        "yarn_offset_m": [p.offset_m for p in paths],
+        "yarn_level": [p.level for p in paths],
+        "z_levels_m": fabric.levels(),
+        "loose_thickness_m": thickness,
+        "z_extent_m": list(z_extent),
+        "thickness_measure": "extent of all beads including their radius",
+        "crimp": crimp,
+        "areal_density_kg_m2": mass / (size[0] * size[1]),
+        "clearance_m": None if approach is None else approach.gap_m,
+        "clearance_pair": pair,
+        "requested_clearance_m": fabric.clearance_m,
+        "bond_types_per_family": bt_count,
+        "discretisation": scene_dict(disc),
+        "fabric": scene_dict(fabric),
+    }

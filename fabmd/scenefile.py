@@ -1,0 +1,257 @@
+"""Scene files: a TOML description of a fabric (and of the tests run on it).
+
+Sections fabmd owns (unknown keys in them are refused, naming the key)::
+
+    title = "..."                      # optional
+    [fabric]         architecture and its pattern, tiling, periodic, clearance_m, plateau
+    [yarns.warp]     YarnSpec fields: material, linear_density_tex, width_m, height_m,
+    [yarns.weft]       n_fibres, spacing_m or count_per_m, name
+    [yarns.binder]   (3D architectures only)
+    [materials.NAME] FibreMaterial fields: modulus_pa, density_kg_m3
+    [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor
+    [contact]        ContactModel fields: friction, normal, stiffness_factor, ...
+
+Every other top-level table (``[crimp]``, ``[tension]``, ``[picture_frame]``,
+``[drape]``, ...) is kept as a raw dict in :attr:`Scene.protocols` for the
+stage that reads it. Quantities may carry units as text: ``"1200 tex"``,
+``"2 mm"``, ``"73 GPa"``, ``"4 ends/cm"``; bare numbers are SI (tex for linear
+density). ``[fabric] architecture`` is one of:
+
+=====================  ===========================================================
+``plain``              —
+``twill``              ``up``, ``down`` (default 2, 2), ``shift`` (1)
+``satin``              ``n`` (5), ``move`` (smallest allowed)
+``basket``             ``n``, ``m`` (2, n)
+``matrix``             ``matrix`` (rows = warp yarns, 1 = warp on top), ``allow_floats``
+``orthogonal``         ``weft_layers``, ``float_columns``, ``dents``, ``columns``, ``warp_gaps``
+``layer_to_layer``     ``weft_layers``, ``depth``, ``step``, ``dents``, ``columns``, ``warp_gaps``
+``through_thickness``  ``weft_layers``, ``step``, ``dents``, ``columns``, ``warp_gaps``
+``binder_paths``       ``weft_layers``, ``binder_paths`` (per dent, per binder, gap per
+                       column), ``warp_gaps``, ``allow_floats``
+=====================  ===========================================================
+
+plus, for all: ``tiling = [nx, ny]``, ``periodic``, ``clearance_m``, ``plateau``.
+The same objects can be built in Python (:class:`~fabmd.geometry.fabric.Fabric`,
+:class:`Scene`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import InputError
+from .geometry.architecture3d import Architecture3D
+from .geometry.fabric import Fabric, YarnSpec
+from .geometry.weave import Weave
+from .model.beads import Discretisation
+from .model.contact import ContactModel
+from .model.material import CARBON, GLASS, FibreMaterial
+
+#: materials a scene may name without a [materials.NAME] section
+BUILTIN_MATERIALS = {"glass": GLASS, "carbon": CARBON}
+
+def _plain() -> Weave:
+    return Weave.plain()
+
+
+def _matrix(matrix=None, allow_floats: bool = False) -> Weave:
+    if matrix is None:
+        raise InputError("architecture 'matrix' needs matrix = [[...], ...] (rows = warp "
+                         "yarns, 1 = warp on top)")
+    return Weave.from_matrix(matrix, allow_floats=allow_floats)
+
+
+def _binder_paths(weft_layers=None, binder_paths=None, warp_gaps=None,
+                  allow_floats: bool = False) -> Architecture3D:
+    if weft_layers is None or binder_paths is None:
+        raise InputError("architecture 'binder_paths' needs weft_layers and binder_paths "
+                         "(per dent, per binder, its gap at every weft column)")
+    return Architecture3D(weft_layers, binder_paths, warp_gaps, name="3D (binder paths)",
+                          allow_floats=allow_floats)
+
+
+#: architecture -> (constructor, keys it takes)
+ARCHITECTURES = {
+    "plain": (_plain, ()),
+    "twill": (Weave.twill, ("up", "down", "shift")),
+    "satin": (Weave.satin, ("n", "move")),
+    "basket": (Weave.basket, ("n", "m")),
+    "matrix": (_matrix, ("matrix", "allow_floats")),
+    "orthogonal": (Architecture3D.orthogonal,
+                   ("weft_layers", "float_columns", "dents", "columns", "warp_gaps")),
+    "layer_to_layer": (Architecture3D.layer_to_layer,
+                       ("weft_layers", "depth", "step", "dents", "columns", "warp_gaps")),
+    "through_thickness": (Architecture3D.through_thickness,
+                          ("weft_layers", "step", "dents", "columns", "warp_gaps")),
+    "binder_paths": (_binder_paths,
+                     ("weft_layers", "binder_paths", "warp_gaps", "allow_floats")),
+}
+FABRIC_KEYS = ("architecture", "tiling", "periodic", "clearance_m", "plateau")
+OWNED = ("fabric", "yarns", "materials", "discretisation", "contact")
+TOP_LEVEL_KEYS = ("title", "description")
+YARN_FAMILIES = ("warp", "weft", "binder")
+
+
+@dataclass
+class Scene:
+    """A loaded scene: the fabric, how it is discretised, contact, and protocol sections.
+
+    Attributes:
+        fabric: the fabric description.
+        discretisation: bead spacing ratio, mass scaling, bending.
+        contact: fibre–fibre contact.
+        materials: materials by name (built-ins and ``[materials.NAME]``).
+        protocols: raw dicts of every other top-level table (``protocols["crimp"]``).
+        title: optional label.
+        source: the file it came from (None when built in Python).
+    """
+
+    fabric: Fabric
+    discretisation: Discretisation = field(default_factory=Discretisation)
+    contact: ContactModel = field(default_factory=ContactModel)
+    materials: dict = field(default_factory=dict)
+    protocols: dict = field(default_factory=dict)
+    title: str = ""
+    source: str | None = None
+
+    def model(self, check: bool = True):
+        """Render the fabric into a :class:`~fabmd.model.bead_model.BeadModel`."""
+        from .model.fabric_model import render_fabric
+
+        return render_fabric(self.fabric, self.discretisation, check=check)
+
+    def to_dict(self) -> dict:
+        """JSON-able resolved scene (SI numbers), protocol sections as given."""
+        from .protocols.common import scene_dict
+
+        return {"title": self.title, "source": self.source,
+                "fabric": scene_dict(self.fabric),
+                "discretisation": scene_dict(self.discretisation),
+                "contact": scene_dict(self.contact),
+                "materials": {k: scene_dict(v) for k, v in self.materials.items()},
+                "protocols": self.protocols}
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file.
+
+    Raises:
+        InputError: one line naming the file, the section and the key or value.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise InputError(f"cannot read scene file {path}: {exc.strerror}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{path}: not valid TOML: {exc}") from None
+    return parse_scene(data, source=str(path))
+
+
+def _section(data: dict, name: str, where: str) -> dict:
+    value = data.get(name, {})
+    if not isinstance(value, dict):
+        raise InputError(f"{where}: [{name}] must be a table, got {value!r}")
+    return value
+
+
+def _check_keys(table: dict, allowed, where: str, section: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise InputError(f"{where}: [{section}] has no key {key!r} "
+                             f"(allowed: {', '.join(allowed)})")
+
+
+def _build(where: str, section: str, factory, **kwargs):
+    try:
+        return factory(**kwargs)
+    except InputError as exc:
+        raise InputError(f"{where}: [{section}] {exc}") from None
+    except TypeError as exc:  # a key given with the wrong shape, e.g. a table for a number
+        raise InputError(f"{where}: [{section}] {exc}") from None
+
+
+def _fields(cls) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls))
+
+
+def parse_scene(data: dict, source: str = "scene") -> Scene:
+    """Validate a scene given as a dict (e.g. parsed TOML); see the module docstring."""
+    where = source
+    for key, value in data.items():
+        if key in OWNED:
+            continue
+        if isinstance(value, dict):
+            continue  # a protocol section
+        if key not in TOP_LEVEL_KEYS:
+            raise InputError(f"{where}: unknown top-level key {key!r} (allowed: "
+                             f"{', '.join(TOP_LEVEL_KEYS)}, or tables "
+                             f"{', '.join('[' + s + ']' for s in OWNED)} and protocol tables)")
+    protocols = {k: v for k, v in data.items() if k not in OWNED and isinstance(v, dict)}
+
+    materials = dict(BUILTIN_MATERIALS)
+    for name, table in _section(data, "materials", where).items():
+        if not isinstance(table, dict):
+            raise InputError(f"{where}: [materials.{name}] must be a table")
+        _check_keys(table, ("modulus_pa", "density_kg_m3"), where, f"materials.{name}")
+        materials[name] = _build(where, f"materials.{name}", FibreMaterial, name=name, **table)
+
+    yarn_tables = _section(data, "yarns", where)
+    specs = {}
+    for fam, table in yarn_tables.items():
+        if fam not in YARN_FAMILIES:
+            raise InputError(f"{where}: [yarns.{fam}] is not a yarn family "
+                             f"(allowed: {', '.join(YARN_FAMILIES)})")
+        if not isinstance(table, dict):
+            raise InputError(f"{where}: [yarns.{fam}] must be a table")
+        _check_keys(table, _fields(YarnSpec), where, f"yarns.{fam}")
+        kwargs = dict(table)
+        mat = kwargs.get("material")
+        if mat is None:
+            raise InputError(f"{where}: [yarns.{fam}] needs material = \"<name>\" (one of "
+                             f"{', '.join(materials)}, or add a [materials.<name>] table)")
+        if mat not in materials:
+            raise InputError(f"{where}: [yarns.{fam}] material {mat!r} is not defined (known: "
+                             f"{', '.join(materials)}; add a [materials.{mat}] table)")
+        kwargs["material"] = materials[mat]
+        for required in ("linear_density_tex", "width_m"):
+            if required not in kwargs:
+                raise InputError(f"{where}: [yarns.{fam}] needs {required}")
+        specs[fam] = _build(where, f"yarns.{fam}", YarnSpec, **kwargs)
+    for fam in ("warp", "weft"):
+        if fam not in specs:
+            raise InputError(f"{where}: [yarns.{fam}] is missing")
+
+    fab = dict(_section(data, "fabric", where))
+    kind = fab.pop("architecture", None)
+    if kind not in ARCHITECTURES:
+        raise InputError(f"{where}: [fabric] architecture must be one of "
+                         f"{', '.join(ARCHITECTURES)}, got {kind!r}")
+    factory, arch_keys = ARCHITECTURES[kind]
+    _check_keys(fab, tuple(FABRIC_KEYS[1:]) + arch_keys, where, "fabric")
+    arch = _build(where, "fabric", factory, **{k: fab.pop(k) for k in arch_keys if k in fab})
+    if isinstance(arch, Architecture3D) and "binder" not in specs:
+        raise InputError(f"{where}: [yarns.binder] is required: the 3D architecture has "
+                         f"{arch.n_binders} binder yarns")
+    if "tiling" in fab and isinstance(fab["tiling"], list):
+        fab["tiling"] = tuple(fab["tiling"])
+    fabric = _build(where, "fabric", Fabric, architecture=arch, warp=specs["warp"],
+                    weft=specs["weft"], binder=specs.get("binder"), **fab)
+
+    disc_table = _section(data, "discretisation", where)
+    _check_keys(disc_table, _fields(Discretisation), where, "discretisation")
+    disc = _build(where, "discretisation", Discretisation, **disc_table)
+    contact_table = _section(data, "contact", where)
+    _check_keys(contact_table, _fields(ContactModel), where, "contact")
+    contact = _build(where, "contact", ContactModel, **contact_table)
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        raise InputError(f"{where}: title must be text, got {title!r}")
+    return Scene(fabric=fabric, discretisation=disc, contact=contact,
+                 materials={k: v for k, v in materials.items()}, protocols=protocols,
+                 title=title, source=source)
