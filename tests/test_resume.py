@@ -45,7 +45,9 @@ def test_resume_equals_uninterrupted_run(tmp_path, woven_coupon):
                                atol=1e-6 * np.abs(a["force_n"]).max())
     eb_whole, eb_resumed = whole.summary["energy_balance"], resumed.summary["energy_balance"]
     assert eb_whole["contact_work_j"] != 0  # contacts work: their history was restored too
-    assert eb_resumed["contact_work_j"] == pytest.approx(eb_whole["contact_work_j"], rel=1e-3)
+    # sampled contact power is noisy (stick-slip): compare on the scale of the balance
+    assert eb_resumed["contact_work_j"] == pytest.approx(
+        eb_whole["contact_work_j"], abs=1e-4 * eb_whole["external_work_j"])
     assert eb_resumed["relative_error"] == pytest.approx(eb_whole["relative_error"], abs=1e-4)
 
 
