@@ -71,7 +71,7 @@ def plain_weave_cell(spacing_m=2e-3, diameter_m=0.5e-3, gap=1.5, cells=(1, 1),
         box_hi=[period[0], period[1], 4 * diameter_m] if periodic else
         [period[0] + diameter_m, period[1] + diameter_m, 4 * diameter_m],
         periodic=(periodic, periodic, False),
-        info={"fibre_area_m2": {"warp": fibre.area_m2, "weft": fibre.area_m2}})
+        info={"families": {f: {"fibre_area_m2": fibre.area_m2} for f in ("warp", "weft")}})
 
 
 def parallel_fibres(n=4, length_m=10e-3, diameter_m=0.5e-3, spacing_ratio=0.5,
@@ -93,4 +93,4 @@ def parallel_fibres(n=4, length_m=10e-3, diameter_m=0.5e-3, spacing_ratio=0.5,
         fibre_yarn=np.arange(1, n + 1), yarns=[Yarn(f"warp-{j}", "warp") for j in range(n)],
         box_lo=[-diameter_m, -diameter_m, -diameter_m],
         box_hi=[x[-1] + diameter_m, (n - 1) * gap * diameter_m + diameter_m, diameter_m],
-        info={"fibre_area_m2": {"warp": fibre.area_m2}})
+        info={"families": {"warp": {"fibre_area_m2": fibre.area_m2}}})

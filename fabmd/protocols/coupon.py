@@ -26,7 +26,7 @@ from ..results.measure import fabric_measures
 from ..scene import blocks
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
-from .common import DATA_FILE, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
 
 PROTOCOL = "coupon"
 COUPON = "coupon"
@@ -90,7 +90,7 @@ class Coupon:
 
     def input_text(self, model: BeadModel) -> str:
         beads = model_bead_parameters(model)
-        kn = self.contact.normal_stiffness_n_per_m(beads)
+        kn = self.contact.stability_stiffness_n_per_m(beads)
         dt = self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
         ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
         k = max(2 * bt.coefficient for bt in model.bond_type_table)
@@ -99,6 +99,7 @@ class Coupon:
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
+            blocks.overlap_monitor(model, self.contact, beads),
             "group           held empty\ngroup           free subtract all held\n"
             "fix             integrate free nve\n"
             "# a free coupon has nothing to stop rigid drift; local damping does not see it\n"
@@ -128,7 +129,8 @@ class Coupon:
             relaxed = BeadModel.load(Path(run_dir) / f"{COUPON}.data", Path(run_dir) / "model.json")
             relaxed.save(run_dir, stem=COUPON)
             summary = {"relaxed": True, "cut": fabric_measures(geometry),
-                       "relaxed_state": fabric_measures(relaxed)}
+                       "relaxed_state": fabric_measures(relaxed),
+                       "overlap": overlap_summary(run_dir, self.contact)}
             write_json(Path(run_dir) / "summary.json", summary)
         summary = mpi.bcast_json(summary)
         return CouponResult(Path(run_dir), load_coupon(run_dir), summary)

@@ -35,7 +35,7 @@ from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import fmt, render
-from .common import DATA_FILE, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
 
 PROTOCOL = "crimp"
 CRIMPED = "crimped"
@@ -92,7 +92,7 @@ class Crimp:
 
     def time_step_s(self, model: BeadModel) -> float:
         beads = model_bead_parameters(model)
-        kn = self.contact.normal_stiffness_n_per_m(beads)
+        kn = self.contact.stability_stiffness_n_per_m(beads)
         return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
 
     def ramp_steps(self, model: BeadModel) -> int:
@@ -164,6 +164,7 @@ class Crimp:
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
+            blocks.overlap_monitor(model, self.contact, beads, every=every),
             blocks.guards(model, dt, max_rest_length_scale=max_scale).replace(
                 "thermo_modify   lost error lost/bond error", ""),
             text,
@@ -266,5 +267,6 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
                       "final_force_ratio": float(raw["force_ratio"][-1])},
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
+        "overlap": overlap_summary(run_dir, crimp.contact),
     }
     return crimped, summary

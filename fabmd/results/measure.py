@@ -100,10 +100,12 @@ def family_tension_n(model: BeadModel, rest_length_scale: dict[int, float] | Non
 def fibre_volume_m3(model: BeadModel) -> float:
     """Filament volume Σ A·(bond length) [m³].
 
-    The filament area per family comes from ``model.info['fibre_area_m2']``; NaN when
-    the model does not carry it.
+    The filament area per family comes from ``model.info['families'][f]['fibre_area_m2']``
+    (written by :func:`fabmd.model.fabric_model.render_fabric`); NaN when the model does
+    not carry it.
     """
-    areas = model.info.get("fibre_area_m2", {})
+    areas = {f: v["fibre_area_m2"] for f, v in model.info.get("families", {}).items()
+             if "fibre_area_m2" in v}
     if not areas:
         return float("nan")
     vec = np.linalg.norm(bond_vectors(model), axis=1)
