@@ -12,7 +12,8 @@ steps.
 
 Outputs in the run folder: ``crimped.data`` + ``crimped.json`` (the as-woven
 bead model, reusable by the test protocols), ``history.dat``/``history.csv``,
-``summary.json`` (loose and crimped measures) and ``history.png``.
+``summary.json`` (loose and crimped measures), ``history.png`` and
+``sections.png`` (top view and cross-sections along warp and weft).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from ..model.contact import ContactModel
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import fabric_measures
 from ..results.plots import plot_curves
+from ..results.preview import preview_png
 from ..scene import blocks
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import fmt, render
@@ -251,6 +253,8 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
                "thickness_m": raw["bead_centre_span_m"] + float(loose.diameters.max())}
     write_csv(run_dir / "history.csv", history)
     ramp = crimp.ramp_steps(loose)
+    preview_png(crimped, run_dir / "sections.png",
+                title="As-woven state after the crimp stage (sections along warp and weft)")
     plot_curves(run_dir / "history.png", [
         {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
     ], "time step", "thickness [mm]", title="Crimp: thickness during ramp and relaxation",

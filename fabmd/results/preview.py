@@ -18,6 +18,7 @@ import numpy as np
 
 from ..engine import mpi
 from ..model.bead_model import BeadModel
+from .measure import thickness_m
 from .plots import _pyplot
 
 COLOURS = {"warp": (0.12, 0.38, 0.75), "weft": (0.84, 0.19, 0.15),
@@ -65,8 +66,7 @@ def preview_png(model: BeadModel, path: Path, title: str = "") -> Path | None:
     pos = model.positions * mm
     d = model.diameters * mm
     cell = np.array(info.get("unit_cell_m", model.box_hi[:2] - model.box_lo[:2])) * mm
-    z_lo, z_hi = (np.array(info["z_extent_m"]) * mm if "z_extent_m" in info
-                  else (pos[:, 2].min(), pos[:, 2].max()))
+    z_lo, z_hi = pos[:, 2].min(), pos[:, 2].max()
     offsets = np.array(info.get("yarn_offset_m", [np.nan] * len(model.yarns))) * mm
     families = [y.family for y in model.yarns]
 
@@ -151,10 +151,11 @@ def preview_png(model: BeadModel, path: Path, title: str = "") -> Path | None:
                     fontsize=9)
 
     name = info.get("architecture", {}).get("name", "")
-    clear = info.get("clearance_m")
+    # the clearance was measured on the loose fabric; a later state does not keep it
+    clear = info.get("clearance_m") if "crimp" not in info else None
     lines = [title or f"fabmd fabric: {name}",
              f"{model.n_beads:,} beads, {model.n_fibres:,} fibres, {len(model.yarns)} yarns; "
-             f"thickness {info.get('loose_thickness_m', 0) * mm:.3g} mm"
+             f"thickness {thickness_m(model) * mm:.3g} mm"
              + (f"; min. gap between yarns {clear * mm:.3g} mm" if clear is not None else "")
              + ("; periodic" if model.periodic[0] else "")]
     fig.suptitle("\n".join(lines), fontsize=10)
