@@ -1,0 +1,52 @@
+"""``fabmd measure DIR``: measure the fabric state a run folder holds."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .common import emit
+
+#: state files, most advanced first
+STATES = (("final.data", "model.json"), ("crimped.data", "crimped.json"),
+          ("coupon.data", "coupon.json"), ("model.data", "model.json"))
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("folder", type=Path, help="a run folder (crimp, coupon, test or build)")
+    p.add_argument("--edge-m", type=float, default=0.0,
+                   help="measure only beads this far inside the fabric's edges [m]")
+    p.add_argument("--overwrite", action="store_true", help="replace measures.json")
+    p.add_argument("--json", action="store_true", help="print the measures as JSON")
+
+
+def run(args) -> int:
+    from ..errors import InputError, OutputExists
+    from ..model.bead_model import BeadModel
+    from ..results.folder import write_json
+    from ..results.measure import fabric_measures
+    from ..results.preview import preview_png
+
+    folder = args.folder
+    for data, meta in STATES:
+        if (folder / data).exists() and (folder / meta).exists():
+            break
+    else:
+        raise InputError(f"{folder} holds no fabric state (looked for "
+                         f"{', '.join(d for d, _ in STATES)} with their .json)")
+    out = folder / "measures.json"
+    if out.exists() and not args.overwrite:
+        raise OutputExists(f"{out} exists; pass --overwrite to replace it")
+    model = BeadModel.load(folder / data, folder / meta)
+    measures = fabric_measures(model, edge_m=args.edge_m)
+    measures["state"] = data
+    write_json(out, measures)
+    preview_png(model, folder / "measures.png", title=f"{folder.name}: {data}")
+    crimps = ", ".join(f"{f} {c:.2f} %" for f, c in measures["crimp_pct"].items())
+    text = (f"{folder / data}: {model.n_beads} beads\n"
+            f"  thickness {1e3 * measures['thickness_m']:.3f} mm ({measures['measured_over']})\n"
+            f"  crimp {crimps}\n"
+            f"  fibre volume fraction {measures['fibre_volume_fraction']}\n"
+            f"  written {out} and {folder / 'measures.png'}")
+    emit(measures, args.json, text)
+    return 0

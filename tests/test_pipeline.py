@@ -1,0 +1,97 @@
+"""The scene-file pipeline: fabmd crimp, fabmd test, fabmd measure (tiny scene, seconds)."""
+
+import json
+
+import pytest
+
+from fabmd.errors import InputError
+from fabmd.pipeline import coupon_stage, crimp_stage, protocol_stage, run_test
+from fabmd.scenefile import parse_scene
+
+from .conftest import run_cli
+
+pytestmark = pytest.mark.lammps
+
+TINY = """
+title = "tiny plain weave, one virtual fibre per yarn"
+[fabric]
+architecture = "plain"
+[materials.soft]
+modulus_pa = "1 GPa"
+density_kg_m3 = 2540
+[yarns.warp]
+material = "soft"
+linear_density_tex = 600
+n_fibres = 1
+width_m = "1.0 mm"
+count_per_m = "4 ends/cm"
+[yarns.weft]
+material = "soft"
+linear_density_tex = 600
+n_fibres = 1
+width_m = "1.0 mm"
+count_per_m = "4 picks/cm"
+[crimp]
+expansion = { warp = -0.08, weft = -0.08 }
+[tension]
+max_elongation_pct = 2.0
+speed_fraction = 2e-4
+coupon = { cells = [3, 2] }
+"""
+
+
+@pytest.fixture
+def tiny_scene(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    return path
+
+
+def test_stage_settings_come_from_the_scene(tiny_scene):
+    import tomllib
+
+    scene = parse_scene(tomllib.loads(TINY))
+    assert crimp_stage(scene).expansion == {"warp": -0.08, "weft": -0.08}
+    coupon, source = coupon_stage(scene, "tension")
+    assert source == "cell" and coupon.length_m == pytest.approx(3 * 5e-3)
+    assert protocol_stage(scene, "tension").max_elongation_pct == 2.0
+    bad = parse_scene(tomllib.loads(TINY.replace("max_elongation_pct", "max_elongaton_pct")))
+    with pytest.raises(InputError, match="max_elongaton_pct"):
+        protocol_stage(bad, "tension")
+
+
+def test_cli_crimp_test_and_measure(tiny_scene, tmp_path):
+    out = run_cli("crimp", str(tiny_scene), "--out", str(tmp_path / "c"), "--form", "cell",
+                  "--json")
+    assert out.returncode == 0, out.stderr
+    crimp = json.loads(out.stdout)
+    assert crimp["quasi_static"] and crimp["crimped"]["thickness_m"] < crimp["loose"][
+        "thickness_m"]
+    out = run_cli("test", "tension", str(tiny_scene), "--out", str(tmp_path / "t"),
+                  "--crimped", str(tmp_path / "c"), "--json")
+    assert out.returncode == 0, out.stderr
+    summary = json.loads(out.stdout)["test_summary"]
+    assert summary["energy_balance"]["relative_error"] < 0.05
+    for name in ("coupon/coupon.data", "tension/curve.csv", "tension/curve.png",
+                 "summary.json"):
+        assert (tmp_path / "t" / name).exists(), name
+    out = run_cli("measure", str(tmp_path / "c"), "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["thickness_m"] == pytest.approx(
+        crimp["crimped"]["thickness_m"], rel=1e-6)
+    again = run_cli("measure", str(tmp_path / "c"))
+    assert again.returncode == 2 and "--overwrite" in again.stderr
+
+
+def test_resume_of_a_finished_pipeline_keeps_stages(tiny_scene, tmp_path):
+    import tomllib
+
+    from fabmd.engine import Engine
+
+    scene = parse_scene(tomllib.loads(TINY), source=str(tiny_scene))
+    engine = Engine(progress=False, checkpoint_every=2000)
+    first = run_test(scene, "tension", tmp_path / "r", engine=engine)
+    assert (tmp_path / "r" / "crimp" / "crimped.data").exists()
+    with pytest.raises(InputError, match="nothing to resume"):
+        run_test(scene, "tension", tmp_path / "missing", engine=engine, resume=True)
+    assert first["test_summary"]["steps"] > 0
