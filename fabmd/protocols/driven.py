@@ -104,14 +104,22 @@ class DrivenTest:
         return min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
                    for b in model_bead_parameters(model))
 
-    def loading(self, model: BeadModel) -> SmoothStartSpeed:
+    def nominal_loading(self, model: BeadModel) -> SmoothStartSpeed:
         """Boundary speed ``speed_fraction``·c, reached smoothly over ``ramp_fraction``."""
         v = self.speed_fraction * self.wave_speed_m_s(model)
         total = self.travel_m(model) / v
         return SmoothStartSpeed(v, self.ramp_fraction * total / (1 - self.ramp_fraction / 2))
 
+    def loading(self, model: BeadModel) -> SmoothStartSpeed:
+        """The nominal loading, a hair slower (less than one output interval over the test)
+        so that the travel ends exactly on the last step, the last sample."""
+        k = self.duration_s(model) / (self.steps(model) * self.time_step_s(model))
+        nominal = self.nominal_loading(model)
+        return SmoothStartSpeed(nominal.speed_m_s * k, nominal.ramp_time_s / k)
+
     def duration_s(self, model: BeadModel) -> float:
-        return self.loading(model).time_for(self.travel_m(model))
+        """Nominal duration of the loading [s]."""
+        return self.nominal_loading(model).time_for(self.travel_m(model))
 
     def time_step_s(self, model: BeadModel) -> float:
         beads = model_bead_parameters(model)
