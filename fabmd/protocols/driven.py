@@ -157,7 +157,8 @@ class DrivenTest:
                       print_names: str = "", thermo_values: str = "") -> str:
         """Interval means, printed curve and thermo (``driven_outputs.lmp``)."""
         every = self.every(model)
-        return render("driven_outputs", external_power=external_power,
+        strain = "ebond+eangle" if len(model.angles) else "ebond"
+        return render("driven_outputs", external_power=external_power, strain_energy=strain,
                       external_ref=external_ref, gamma=self.gamma(model), every=every,
                       mean_values=mean_values, mean_names=mean_names,
                       print_values=print_values, print_names=print_names,

@@ -337,9 +337,11 @@ def interval_force(displacement: np.ndarray, work: np.ndarray) -> np.ndarray:
     return force
 
 
-def fibre_shear_angles(run_dir: Path, model: BeadModel, centre, half_size
-                       ) -> tuple[np.ndarray, np.ndarray]:
-    """(steps, shear angle between warp and weft in the central zone [deg]) per frame."""
+def fibre_shear_angles(run_dir: Path, model: BeadModel, centre, half_size,
+                       reference_deg: float = 45.0) -> tuple[np.ndarray, np.ndarray]:
+    """(steps, shear angle between warp and weft in the central zone [deg]) per trajectory
+    frame; ``reference_deg``: the direction the test stretches (see
+    :func:`fabmd.results.fibre_angles.shear_angle_deg`)."""
     path = Path(run_dir) / TRAJECTORY
     if not path.exists():
         return np.zeros(0), np.zeros(0)
@@ -350,7 +352,7 @@ def fibre_shear_angles(run_dir: Path, model: BeadModel, centre, half_size
             continue
         if first_zone is None:  # the zone follows the beads that were in it at the start
             first_zone = zone_mask(pos, centre, half_size)
-        gamma = shear_angle_deg(model, pos, first_zone)
+        gamma = shear_angle_deg(model, pos, first_zone, reference_deg=reference_deg)
         if gamma is not None:
             steps.append(step)
             angles.append(gamma)

@@ -1,10 +1,11 @@
 """Fibre directions measured on a bead state, and the in-plane shear angle between families.
 
 The direction of a yarn family in a zone is the mean of the in-plane directions
-of its bonds whose both beads lie in the zone, as an axis (a bond and its reverse
+of its bonds (along a fibre) whose both beads lie in the zone, as an axis (a bond and its reverse
 count alike): the doubled-angle mean ½·arg Σ |b|·exp(2iα), weighted by in-plane bond
-length. The shear angle between two families is 90° minus the acute angle between
-their mean axes (0 for the as-woven orthogonal fabric).
+length. The shear angle between two families is 90° minus the angle between their mean
+axes across the sector that holds the direction the test stretches (0 for the as-woven
+orthogonal fabric; positive when that sector closes).
 
 Trajectories are LAMMPS ``dump custom`` files with ``id mol type x y z`` sorted by
 id (:func:`fabmd.protocols.driven.trajectory_commands`).
@@ -52,7 +53,8 @@ def family_axes_deg(model: BeadModel, positions: np.ndarray,
     """Mean in-plane axis of every family's bonds inside ``mask`` [deg, in (−90, 90]]."""
     mask = np.ones(model.n_beads, bool) if mask is None else np.asarray(mask, bool)
     b = model.bonds
-    inside = mask[b[:, 0]] & mask[b[:, 1]]
+    # bonds along a fibre only (not, e.g., bonds that join crossing fibres)
+    inside = mask[b[:, 0]] & mask[b[:, 1]] & (model.fibre_ids[b[:, 0]] == model.fibre_ids[b[:, 1]])
     vec = positions[b[inside, 1], :2] - positions[b[inside, 0], :2]
     fam = np.asarray(model.family_names)[model.atom_types[b[inside, 0]] - 1]
     out: dict[str, float | None] = {}
@@ -75,10 +77,20 @@ def angle_between_axes_deg(a: float, b: float) -> float:
 
 
 def shear_angle_deg(model: BeadModel, positions: np.ndarray, mask: np.ndarray | None = None,
-                    families: tuple[str, str] = ("warp", "weft")) -> float | None:
-    """90° minus the acute angle between the mean axes of two families in ``mask``."""
+                    families: tuple[str, str] = ("warp", "weft"),
+                    reference_deg: float = 45.0) -> float | None:
+    """Signed shear angle between two families in ``mask`` [deg].
+
+    90° minus the angle between their mean axes measured across the sector that holds
+    ``reference_deg`` — the direction the test stretches (the pulled diagonal of a picture
+    frame, 45°; the load axis of a bias-extension test, 0°): positive when that sector
+    closes, 0 for fibres at right angles.
+    """
     axes = family_axes_deg(model, positions, mask)
     a, b = axes.get(families[0]), axes.get(families[1])
     if a is None or b is None:
         return None
-    return 90.0 - angle_between_axes_deg(a, b)
+    a = (a - reference_deg + 90.0) % 180.0 - 90.0  # in [-90, 90) about the reference
+    b = (b - reference_deg + 90.0) % 180.0 - 90.0
+    sector = abs(a - b) if a * b <= 0 else 180.0 - abs(a - b)
+    return 90.0 - sector
