@@ -153,3 +153,20 @@ def test_without_friction_the_force_is_much_lower(as_woven, frictional, tmp_path
     assert without["mean_frame_force_n"] < 0.5 * with_mu["mean_frame_force_n"]
     assert without["max_frame_force_n"] < 0.5 * with_mu["max_frame_force_n"]
     assert without["energy_balance"]["relative_error"] < 0.05
+
+
+def test_preload_shrinks_only_the_unclamped_fibres():
+    square = plain_weave_cell(spacing_m=1e-3, cells=(3, 3), periodic=False)
+    frame = PictureFrame(pretension_strain=0.01)
+    prepared = frame.prepare(square)
+    clamped = frame.clamped(square)
+    both = clamped[square.bonds[:, 0]] & clamped[square.bonds[:, 1]]
+    new_types = frame.preload_types(prepared)
+    assert len(new_types) == 2 and len(prepared.bond_type_table) == 4
+    assert np.all(np.isin(prepared.bond_types[~both], new_types))
+    assert not np.any(np.isin(prepared.bond_types[both], new_types))
+    text = frame.input_text(prepared)
+    assert "fix             pretension all adapt" in text
+    r0 = prepared.bond_type_table[new_types[0] - 1].rest_length_m
+    assert f"{r0 * 0.99:.10g}" in text  # the shorter rest length is kept for the test
+    assert "no clamping preload" in PictureFrame().input_text(square)
