@@ -37,6 +37,7 @@ from .driven import (
     kinetic_ratio,
     read_outputs,
     started_mask,
+    trajectory_commands,
 )
 
 PROTOCOL = "tension"
@@ -57,6 +58,7 @@ class Tension(DrivenTest):
         time_step: time-step policy.
         samples: curve points.
         report_elongations_pct: elongations at which forces are reported.
+        trajectory_frames: frames written to ``trajectory.lammpstrj`` (0: none).
     """
 
     max_elongation_pct: float = 3.0
@@ -69,6 +71,7 @@ class Tension(DrivenTest):
     samples: int = 200
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    trajectory_frames: int = 20
 
     protocol: ClassVar[str] = PROTOCOL
     rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
@@ -84,6 +87,7 @@ class Tension(DrivenTest):
         if self.damping_time_s is not None:
             inputs.positive("tension.damping_time_s", self.damping_time_s)
         inputs.positive_int("tension.samples", self.samples, minimum=10)
+        inputs.positive_int("tension.trajectory_frames", self.trajectory_frames, minimum=0)
 
     # -- geometry of the coupon --------------------------------------------------------
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
@@ -133,6 +137,8 @@ class Tension(DrivenTest):
             blocks.contact(model, self.contact, beads),
             text,
             ContactPower.commands(),
+            trajectory_commands(self.trajectory_every(model, self.trajectory_frames))
+            if self.trajectory_frames else "# no trajectory",
             extra,
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
