@@ -11,47 +11,55 @@ kinetic/strain energy ratio over the run and an energy balance
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
 from .. import inputs
-from ..engine import Engine, mpi
 from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
-from ..results.curves import bilinear_fit, curve_difference, values_at
-from ..results.folder import read_ave_time, read_print_file, write_csv, write_json
-from ..results.plots import plot_curves
+from ..results.curves import bilinear_fit, values_at
 from ..scene import blocks
-from ..scene.energy import ContactPower, balance, cumulative
-from ..scene.loading import SmoothStartSpeed
+from ..scene.energy import ContactPower
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
-from .common import DATA_FILE, input_name, resume_folder, scene_dict, write_run_folder
+from .common import DATA_FILE
+from .driven import (
+    STARTED_NOTE,
+    DrivenResult,
+    DrivenTest,
+    clamp_power,
+    energy_balance,
+    energy_columns,
+    kinetic_ratio,
+    read_outputs,
+    started_mask,
+    trajectory_commands,
+)
 
 PROTOCOL = "tension"
 
 
 @dataclass(frozen=True)
-class Tension:
+class Tension(DrivenTest):
     """Uniaxial tension test of a coupon (length along x).
 
     Args:
         max_elongation_pct: elongation at the end of the test [%] (0, 50].
         clamp_length_m: clamped length at each end [m]; default 10 % of the coupon.
         speed_fraction: speed of each clamp over the fibres' axial wave speed
-            (quasi-static when small; default 1e-4).
+            (quasi-static when small; default 2e-4).
         ramp_fraction: share of the test spent reaching full speed smoothly.
         damping_time_s: τ of the viscous damping γ = m/τ (default: a tenth of the test).
         contact: fibre–fibre contact.
         time_step: time-step policy.
         samples: curve points.
         report_elongations_pct: elongations at which forces are reported.
+        trajectory_frames: frames written to ``trajectory.lammpstrj`` (0: none).
     """
 
     max_elongation_pct: float = 3.0
@@ -64,6 +72,11 @@ class Tension:
     samples: int = 200
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    trajectory_frames: int = 20
+
+    protocol: ClassVar[str] = PROTOCOL
+    rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
+    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n"}
 
     def __post_init__(self):
         inputs.in_range("tension.max_elongation_pct", self.max_elongation_pct, 0, 50,
@@ -75,6 +88,7 @@ class Tension:
         if self.damping_time_s is not None:
             inputs.positive("tension.damping_time_s", self.damping_time_s)
         inputs.positive_int("tension.samples", self.samples, minimum=10)
+        inputs.positive_int("tension.trajectory_frames", self.trajectory_frames, minimum=0)
 
     # -- geometry of the coupon --------------------------------------------------------
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
@@ -96,182 +110,77 @@ class Tension:
         gauge = float(x[x > right].min() - x[x < left].max())
         return float(left), float(right), gauge
 
-    def wave_speed_m_s(self, model: BeadModel) -> float:
-        return min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
-                   for b in model_bead_parameters(model))
-
-    def loading(self, model: BeadModel) -> SmoothStartSpeed:
-        v = self.speed_fraction * self.wave_speed_m_s(model)
+    def travel_m(self, model: BeadModel) -> float:
+        """Each clamp moves half the elongation of the gauge length."""
         _, _, gauge = self.clamps(model)
-        total = 0.5 * self.max_elongation_pct / 100 * gauge / v  # each clamp moves half
-        return SmoothStartSpeed(v, self.ramp_fraction * total / (1 - self.ramp_fraction / 2))
+        return 0.5 * self.max_elongation_pct / 100 * gauge
 
-    def duration_s(self, model: BeadModel) -> float:
-        _, _, gauge = self.clamps(model)
-        return self.loading(model).time_for(0.5 * self.max_elongation_pct / 100 * gauge)
-
-    def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = self.contact.normal_stiffness_n_per_m(beads)
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
-
-    def every(self, model: BeadModel) -> int:
-        raw = math.ceil(self.duration_s(model) / self.time_step_s(model))
-        return max(1, raw // self.samples)
-
-    def steps(self, model: BeadModel) -> int:
-        """Whole output intervals, so that the last sample is the end of the test."""
-        every = self.every(model)
-        return every * math.ceil(self.duration_s(model) / self.time_step_s(model) / every)
-
-    def gamma(self, model: BeadModel) -> float:
-        tau = self.damping_time_s or self.duration_s(model) / 10
-        return float(np.median(model.masses)) / tau
-
-    def input_text(self, model: BeadModel) -> str:
+    def input_text(self, model: BeadModel, extra: str = "") -> str:
+        """The LAMMPS input; ``extra`` (e.g. a dump) goes in before the run."""
         left, right, _ = self.clamps(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
         beads = model_bead_parameters(model)
-        every = self.every(model)
         ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
         ref_force *= 1e-3 * self.max_elongation_pct
-        k = max(2 * bt.coefficient for bt in model.bond_type_table)
-        relax = blocks.relax(model, dt, "clamps", "free", self.relax, ref_force,
-                             model.n_bonds * ref_force**2 / (2 * k))
-        text = render("tension", x_left=left, x_right=right, relax=relax,
+        power, power_ref = clamp_power("clamps")
+        outputs = self.outputs_block(
+            model, power, power_ref, mean_values="c_f_left c_f_right",
+            mean_names="force_left_n force_right_n", print_values="${u}",
+            print_names="clamp_displacement_m", thermo_values="v_u c_f_left c_f_right")
+        text = render("tension", x_left=left, x_right=right,
+                      relax=self.relax_block(model, "clamps", "free", ref_force),
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
-                      gamma=self.gamma(model), every=every,
-                      thermo_every=max(every, self.steps(model) // 20))
+                      gamma=self.gamma(model), outputs=outputs)
         return "\n".join([
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
             text,
             ContactPower.commands(),
+            trajectory_commands(self.trajectory_every(model, self.trajectory_frames))
+            if self.trajectory_frames else "# no trajectory",
+            extra,
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
             render("finish", final_data="final.data"),
         ])
 
-    # -- run ------------------------------------------------------------------------
-    def run(self, coupon: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False, check_rate: bool = False,
-            resume: bool = False, monitor: ContactPower | None = None) -> TensionResult:
-        """Run the test on ``coupon``.
-
-        Args:
-            check_rate: rerun at half speed and report the change of the curve.
-            resume: continue an interrupted run in ``out`` from its last checkpoint
-                (see ``Engine(checkpoint_every=...)``).
-        """
-        engine = engine or Engine()
-        text = self.input_text(coupon)
-        if resume:
-            run_dir = resume_folder(out)
-        else:
-            run_dir = write_run_folder(out, PROTOCOL, coupon, text,
-                                       {"tension": scene_dict(self)}, overwrite=overwrite)
-        monitor = monitor or ContactPower()
-        every = self.every(coupon)
-        run = engine.run(run_dir, input_name(PROTOCOL), label=PROTOCOL, monitor=monitor,
-                         monitor_every=every, resume=resume)
-        result = None
-        if mpi.is_root():
-            result = reduce(run_dir, coupon, self, monitor)
-            result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
-        if check_rate:
-            slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
-            other = slow.run(coupon, out=Path(run_dir) / "half_speed", engine=engine)
-            if mpi.is_root():
-                diff = curve_difference(result.curve["elongation_pct"], result.curve["force_n"],
-                                        other.curve["elongation_pct"], other.curve["force_n"])
-                result.summary["rate_check"] = {
-                    "half_speed_run": str(other.run_dir), "max_relative_force_change": diff,
-                    "initial_stiffness_change": _rel(other.summary["initial_stiffness_n"],
-                                                     result.summary["initial_stiffness_n"])}
-        if mpi.is_root():
-            result.write()
-        summary = mpi.bcast_json(result.summary if result else None)
-        if result is None:
-            result = TensionResult(Path(run_dir), {}, summary)
-        result.summary = summary
-        return result
+    def reduce(self, run_dir: Path, model: BeadModel,
+               monitor: ContactPower | None = None) -> TensionResult:
+        return reduce(run_dir, model, self, monitor)
 
 
-def _rel(a, b):
-    return abs(a - b) / abs(b) if b else None
-
-
-@dataclass
-class TensionResult:
-    """Curve and summary of a tension test."""
-
-    run_dir: Path
-    curve: dict[str, np.ndarray]
-    summary: dict
-
-    def write(self) -> None:
-        write_csv(self.run_dir / "curve.csv", self.curve)
-        write_json(self.run_dir / "summary.json", self.summary)
-        c, s = self.curve, self.summary
-        ke = s["max_kinetic_to_strain_energy"]
-        plot_curves(self.run_dir / "curve.png", [
-            {"x": c["elongation_pct"], "y": c["force_per_width_n_m"], "label": "fabric"},
-        ], "elongation [%]", "force per width [N/m]",
-            title="Uniaxial tension",
-            notes="\n".join([
-                f"gauge {1e3 * s['gauge_length_m']:.1f} mm, width {1e3 * s['width_m']:.1f} mm",
-                f"KE/U after start-up <= {ke:.3f}" if ke is not None else "KE/U: no load",
-                f"{s['n_beads']} beads"]))
+class TensionResult(DrivenResult):
+    """Curve, summary and plot of a tension test."""
 
 
 def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
            monitor: ContactPower | None = None) -> TensionResult:
-    """Read ``curve.dat`` and build the curve, the summary and the energy balance."""
-    raw = read_print_file(Path(run_dir) / "curve.dat")
-    means = read_ave_time(Path(run_dir) / "means.dat")
-    # interval means are reported at the interval's end step; the curve starts at step 0
-    for name in ("force_left_n", "force_right_n", "external_power_w", "damping_power_w"):
-        raw[name] = np.interp(raw["step"], means["step"], means[name], left=0.0)
+    """Read the run back and build the curve, the summary and the energy balance."""
+    out = read_outputs(run_dir, test.every(coupon), test.time_step_s(coupon), monitor)
     _, _, gauge = test.clamps(coupon)
     width = float(np.ptp(coupon.positions[:, 1]) + coupon.diameters.max())
-    dt = test.time_step_s(coupon)
-    every = test.every(coupon)
-    elongation = 2 * raw["clamp_displacement_m"] / gauge
-    force = 0.5 * (raw["force_left_n"] - raw["force_right_n"])
-    external = np.interp(raw["step"], means["step"],
-                         cumulative(means["external_power_w"], every, dt), left=0.0)
-    damping = np.interp(raw["step"], means["step"],
-                        cumulative(means["damping_power_w"], every, dt), left=0.0)
-    contact = monitor.work_j(raw["step"], dt) if monitor is not None else None
+    elongation = 2 * out["clamp_displacement_m"] / gauge
+    force = 0.5 * (out["force_left_n"] - out["force_right_n"])
     curve = {
-        "time_s": raw["time_s"],
+        "time_s": out["time_s"],
         "elongation_pct": 100 * elongation,
         "force_n": force,
         "force_per_width_n_m": force / width,
-        "force_left_n": raw["force_left_n"],
-        "force_right_n": -raw["force_right_n"],
-        "kinetic_energy_j": raw["kinetic_j"],
-        "strain_energy_j": raw["strain_energy_j"],
-        "external_work_j": external,
-        "damping_dissipation_j": damping,
+        "force_left_n": out["force_left_n"],
+        "force_right_n": -out["force_right_n"],
+        **energy_columns(out),
     }
-    if contact is not None:
-        curve["contact_work_j"] = contact
-    # start-up: the smooth start, and the slack toe where the fabric carries (almost) no
-    # load yet (strain energy below 1 % of its final value)
-    loaded = raw["strain_energy_j"] - raw["strain_energy_j"][0] > \
-        0.01 * (raw["strain_energy_j"][-1] - raw["strain_energy_j"][0])
-    started = (raw["time_s"] > test.loading(coupon).ramp_time_s) & loaded
-    ke_ratio = raw["kinetic_j"][started] / np.maximum(raw["strain_energy_j"][started], 1e-300)
+    # start-up: the smooth start, the first tenth of the elongation and the slack toe
+    started = started_mask(out, test.loading(coupon), elongation / (test.max_elongation_pct / 100))
     fit = bilinear_fit(100 * elongation, force)
     summary = {
         "protocol": PROTOCOL,
         "n_beads": coupon.n_beads,
         "gauge_length_m": gauge,
         "width_m": width,
-        "time_step_s": dt,
+        "time_step_s": test.time_step_s(coupon),
         "steps": test.steps(coupon),
         "clamp_speed_m_s": test.loading(coupon).speed_m_s,
         "initial_stiffness_n": fit["initial_slope"] * 100,  # N per unit strain
@@ -283,12 +192,19 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
                                   values_at(100 * elongation, force,
                                             test.report_elongations_pct).items()},
         "max_force_n": float(force.max()),
-        "max_kinetic_to_strain_energy": float(ke_ratio.max()) if ke_ratio.size else None,
-        "quasi_static_note": "kinetic/strain energy after the smooth start, once the strain "
-                             "energy exceeds 1 % of its final value",
-        "clamp_force_mismatch": float(np.abs(raw["force_left_n"] + raw["force_right_n"])[-1]
+        "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
+        "quasi_static_note": STARTED_NOTE,
+        "clamp_force_mismatch": float(np.abs(out["force_left_n"] + out["force_right_n"])[-1]
                                       / max(abs(force[-1]), 1e-300)),
-        "energy_balance": balance(external, raw["strain_energy_j"], raw["kinetic_j"], damping,
-                                  contact),
+        "energy_balance": energy_balance(out),
     }
-    return TensionResult(Path(run_dir), curve, summary)
+    ke = summary["max_kinetic_to_strain_energy"]
+    plot = {"path": "curve.png",
+            "series": [{"x": curve["elongation_pct"], "y": curve["force_per_width_n_m"],
+                        "label": "fabric"}],
+            "xlabel": "elongation [%]", "ylabel": "force per width [N/m]",
+            "title": "Uniaxial tension",
+            "notes": f"gauge {1e3 * gauge:.1f} mm, width {1e3 * width:.1f} mm"
+                     f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
+                     f"\n{coupon.n_beads} beads"}
+    return TensionResult(Path(run_dir), curve, summary, [plot])

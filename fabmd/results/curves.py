@@ -54,3 +54,45 @@ def curve_difference(x1, y1, x2, y2, lower_fraction: float = 0.2) -> float:
     b = np.interp(xs, np.sort(x2), y2[np.argsort(x2)])
     scale = np.abs(a).max()
     return float(np.abs(b - a).max() / scale) if scale > 0 else float("nan")
+
+
+def tangent_intersection(x, y, initial: tuple[float, float] = (0.05, 0.35),
+                         final: float = 0.15, min_ratio: float = 3.0,
+                         min_points: int = 3) -> dict:
+    """Where the tangent of a curve's low initial part meets that of its steep final part.
+
+    The standard reading of a shear-locking angle: a straight line is fitted to the
+    points whose x lies in the ``initial`` fractions of the x range (default 5–35 %,
+    past the start-up), another to the last ``final`` fraction of it; the locking
+    point is their intersection.
+
+    Returns:
+        ``x``, ``y`` of the intersection, ``initial_slope``, ``final_slope``,
+        ``initial_range`` and ``final_range`` (the x ranges fitted), and ``found``:
+        True when the final slope is at least ``min_ratio`` times the initial one
+        (and positive) and the intersection lies inside the x range; ``x``/``y``
+        are None when the lines do not meet.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    order = np.argsort(x)
+    x, y = x[order], y[order]
+    lo, hi = float(x.min()), float(x.max())
+    span = hi - lo
+    a = lo + initial[0] * span, lo + initial[1] * span
+    b = hi - final * span, hi
+    first = (x >= a[0]) & (x <= a[1])
+    last = (x >= b[0]) & (x <= b[1])
+    out = {"x": None, "y": None, "initial_slope": None, "final_slope": None,
+           "initial_range": [a[0], a[1]], "final_range": [b[0], b[1]], "found": False}
+    if first.sum() < min_points or last.sum() < min_points:
+        return out
+    p1 = np.polyfit(x[first], y[first], 1)
+    p2 = np.polyfit(x[last], y[last], 1)
+    out["initial_slope"], out["final_slope"] = float(p1[0]), float(p2[0])
+    if p2[0] - p1[0] <= 0:
+        return out
+    xb = float((p1[1] - p2[1]) / (p2[0] - p1[0]))
+    out["x"], out["y"] = xb, float(np.polyval(p1, xb))
+    steep = p2[0] > 0 and p2[0] >= min_ratio * max(p1[0], 0.0)
+    out["found"] = bool(steep and lo <= xb <= hi)
+    return out

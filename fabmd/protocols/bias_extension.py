@@ -1,0 +1,255 @@
+"""Bias-extension test: a coupon with its yarns at ±45° to the load, pulled at its ends.
+
+The coupon (cut with ``Coupon(angle_deg=45)``, length along x) is clamped at both
+ends exactly like the tension test (:class:`fabmd.protocols.tension.Tension`: the
+clamps move apart along x, smooth start then constant speed) and must have a free
+length H (between the clamps) of at least twice its width W. With L0 = H − W
+the central zone is in pure shear (TEXTILE-PRIMER):
+
+    γ = 90° − 2·acos((L0 + d)/(√2·L0)),   d the clamp separation change.
+
+The shear angle of the central zone is also measured from the fibres: the mean
+in-plane axes of the warp and the weft bonds of the beads that start in a central
+square (half-size ``central_zone_fraction`` × W) are taken from the trajectory
+frames (:mod:`fabmd.results.fibre_angles`), γ = 90° minus the angle between them.
+Force is the mean of the two clamp reactions, against d.
+
+The test needs a fabric whose crossings carry normal force once it is cut free (yarn
+bending stiffness, compaction): yarns without bending stiffness and without tension let
+the clamped fibres slide out, and the centre does not shear (seen on the tests' tiny
+single-fibre plain weaves).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from .. import inputs
+from ..errors import InputError
+from ..model.bead_model import BeadModel
+from ..model.beads import TimeStep
+from ..model.contact import ContactModel
+from ..results.curves import bilinear_fit, values_at
+from ..results.fibre_angles import family_axes_deg
+from ..scene.energy import ContactPower
+from ..scene.quasi_static import QuasiStatic
+from .driven import (
+    DrivenResult,
+    DrivenTest,
+    energy_balance,
+    energy_columns,
+    kinetic_ratio,
+    kinetic_to_work_ratio,
+    read_outputs,
+    started_mask,
+)
+from .picture_frame import fibre_shear_angles
+from .tension import Tension
+
+PROTOCOL = "bias_extension"
+
+
+def bias_shear_angle_deg(displacement_m, free_length_m: float, width_m: float):
+    """Central-zone shear angle γ = 90° − 2·acos((L0 + d)/(√2·L0)), L0 = H − W [deg]."""
+    l0 = free_length_m - width_m
+    ratio = np.clip((l0 + np.asarray(displacement_m, float)) / (math.sqrt(2) * l0), -1, 1)
+    return 90.0 - 2.0 * np.degrees(np.arccos(ratio))
+
+
+def bias_displacement_m(shear_angle_deg, free_length_m: float, width_m: float):
+    """Clamp separation change d that gives central shear angle γ [m]."""
+    l0 = free_length_m - width_m
+    return l0 * (math.sqrt(2) * np.cos(np.radians(45.0 - np.asarray(shear_angle_deg) / 2)) - 1)
+
+
+@dataclass(frozen=True)
+class BiasExtension(DrivenTest):
+    """Bias-extension test of a 45° coupon (length along x, H ≥ 2 W).
+
+    Args:
+        max_shear_angle_deg: central-zone shear angle (closed form) at the end [deg], (0, 80].
+        max_displacement_m: clamp separation change at the end [m]; overrides the angle.
+        clamp_length_m: clamped length at each end [m]; default 10 % of the coupon.
+        central_zone_fraction: half-size of the central square where fibre angles are
+            measured, over the width W, in (0, 0.5].
+        speed_fraction: speed of each clamp over the fibres' axial wave speed.
+        ramp_fraction: share of the test spent reaching full speed smoothly.
+        damping_time_s: τ of the viscous damping γ = m/τ (default: a tenth of the test).
+        contact: fibre–fibre contact.
+        time_step: time-step policy.
+        samples: curve points.
+        trajectory_frames: frames written to ``trajectory.lammpstrj`` (the fibre angles
+            are measured on them).
+        report_angles_deg: central shear angles at which forces are reported.
+        relax: stop criterion of the free relaxation before the test (clamps held).
+    """
+
+    max_shear_angle_deg: float = 40.0
+    max_displacement_m: float | None = None
+    clamp_length_m: float | None = None
+    central_zone_fraction: float = 0.2
+    speed_fraction: float = 1e-3
+    ramp_fraction: float = 0.1
+    damping_time_s: float | None = None
+    contact: ContactModel = field(default_factory=ContactModel)
+    time_step: TimeStep = field(default_factory=TimeStep)
+    samples: int = 200
+    trajectory_frames: int = 20
+    report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
+    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+
+    protocol: ClassVar[str] = PROTOCOL
+    rate_curve: ClassVar[tuple[str, str]] = ("displacement_m", "force_n")
+    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n_m"}
+
+    def __post_init__(self):
+        inputs.in_range("bias_extension.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
+                        low_open=True)
+        if self.max_displacement_m is not None:
+            inputs.positive("bias_extension.max_displacement_m", self.max_displacement_m)
+        if self.clamp_length_m is not None:
+            inputs.positive("bias_extension.clamp_length_m", self.clamp_length_m)
+        inputs.in_range("bias_extension.central_zone_fraction", self.central_zone_fraction,
+                        0, 0.5, low_open=True)
+        inputs.in_range("bias_extension.speed_fraction", self.speed_fraction, 0, 0.05,
+                        low_open=True)
+        inputs.in_range("bias_extension.ramp_fraction", self.ramp_fraction, 0, 0.9)
+        if self.damping_time_s is not None:
+            inputs.positive("bias_extension.damping_time_s", self.damping_time_s)
+        inputs.positive_int("bias_extension.samples", self.samples, minimum=10)
+        inputs.positive_int("bias_extension.trajectory_frames", self.trajectory_frames)
+
+    # -- geometry ---------------------------------------------------------------------
+    def width_m(self, model: BeadModel) -> float:
+        return float(np.ptp(model.positions[:, 1]) + model.diameters.max())
+
+    def free_length_m(self, model: BeadModel) -> float:
+        """H: the free length between the clamps [m]."""
+        return self._clamping().clamps(model)[2]
+
+    def _clamping(self) -> Tension:
+        return Tension(clamp_length_m=self.clamp_length_m)
+
+    def max_displacement(self, model: BeadModel) -> float:
+        if self.max_displacement_m is not None:
+            return self.max_displacement_m
+        return float(bias_displacement_m(self.max_shear_angle_deg, self.free_length_m(model),
+                                         self.width_m(model)))
+
+    def travel_m(self, model: BeadModel) -> float:
+        """Each clamp moves half the separation change."""
+        return 0.5 * self.max_displacement(model)
+
+    def tension(self, model: BeadModel) -> Tension:
+        """The clamping and loading of this test, as the tension protocol runs them."""
+        return Tension(max_elongation_pct=100 * self.max_displacement(model)
+                       / self.free_length_m(model), clamp_length_m=self.clamp_length_m,
+                       speed_fraction=self.speed_fraction, ramp_fraction=self.ramp_fraction,
+                       damping_time_s=self.damping_time_s or self.duration_s(model) / 10,
+                       contact=self.contact, time_step=self.time_step, samples=self.samples,
+                       relax=self.relax, trajectory_frames=self.trajectory_frames)
+
+    def prepare(self, model: BeadModel) -> BeadModel:
+        """Check the coupon: H ≥ 2 W, yarns at ±45° to x, shear angle reachable."""
+        h, w = self.free_length_m(model), self.width_m(model)
+        if h < 2 * w * (1 - 1e-9):
+            raise InputError(
+                f"bias_extension needs a free length H between the clamps of at least twice the "
+                f"width W; got H = {1e3 * h:.2f} mm, W = {1e3 * w:.2f} mm; cut a longer coupon "
+                f"(length >= 2 W + both clamps) or shorten clamp_length_m")
+        for fam, axis in family_axes_deg(model, model.positions).items():
+            if axis is not None and abs(abs(axis) - 45.0) > 10.0:
+                raise InputError(f"bias_extension needs the yarns at +-45 deg to the load (x), "
+                                 f"but the {fam} runs at {axis:.0f} deg; cut the coupon with "
+                                 f"Coupon(angle_deg=45)")
+        dmax = self.max_displacement(model)
+        limit = float(bias_displacement_m(80.0, h, w))
+        if dmax > limit:
+            raise InputError(f"bias_extension.max_displacement_m = {dmax:g} m is beyond an 80 deg "
+                             f"central shear angle; use at most {limit:g} m")
+        return model
+
+    # -- input ------------------------------------------------------------------------
+    def input_text(self, model: BeadModel) -> str:
+        tension = self.tension(model)
+        if tension.steps(model) != self.steps(model):  # one loading, two descriptions
+            raise RuntimeError("bias_extension and its tension clamping disagree on the steps")
+        return tension.input_text(model).replace(
+            "# fabmd tension;", "# fabmd bias_extension (clamping and loading of tension);")
+
+    def reduce(self, run_dir: Path, model: BeadModel,
+               monitor: ContactPower | None = None) -> DrivenResult:
+        return reduce(run_dir, model, self, monitor)
+
+
+def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
+           monitor: ContactPower | None = None) -> DrivenResult:
+    """Force against displacement, central shear angle (closed form and fibres), evidence."""
+    out = read_outputs(run_dir, test.every(model), test.time_step_s(model), monitor)
+    h, w = test.free_length_m(model), test.width_m(model)
+    d = 2 * out["clamp_displacement_m"]
+    force = 0.5 * (out["force_left_n"] - out["force_right_n"])
+    gamma = bias_shear_angle_deg(d, h, w)
+    curve = {"time_s": out["time_s"], "displacement_m": d, "force_n": force,
+             "force_per_width_n_m": force / w, "shear_angle_deg": gamma,
+             **energy_columns(out)}
+    dmax = test.max_displacement(model)
+    started = started_mask(out, test.loading(model), d / dmax)
+    fit = bilinear_fit(d, force)
+    p = model.positions
+    centre = (p[:, :2].min(axis=0) + p[:, :2].max(axis=0)) / 2
+    half = test.central_zone_fraction * w
+    steps, fibre_gamma = fibre_shear_angles(run_dir, model, centre, (half, half),
+                                            reference_deg=0.0)
+    kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)
+    diff = np.abs(fibre_gamma - kinematic)
+    summary = {
+        "protocol": PROTOCOL,
+        "n_beads": model.n_beads,
+        "free_length_m": h,
+        "width_m": w,
+        "l0_m": h - w,
+        "time_step_s": test.time_step_s(model),
+        "steps": test.steps(model),
+        "clamp_speed_m_s": test.loading(model).speed_m_s,
+        "max_displacement_m": dmax,
+        "max_shear_angle_deg": float(gamma.max()),
+        "initial_stiffness_n_m": fit["initial_slope"],  # force per displacement
+        "final_stiffness_n_m": fit["final_slope"],
+        "force_at_angle_n": {f"{k:g}": v for k, v in values_at(
+            gamma, force, test.report_angles_deg).items()},
+        "max_force_n": float(force.max()),
+        "fibre_shear_angle": {
+            "zone": f"beads starting in the central square of half-size "
+                    f"{test.central_zone_fraction:g} W",
+            "steps": steps.tolist(), "kinematic_deg": kinematic.tolist(),
+            "fibres_deg": fibre_gamma.tolist(),
+            "max_difference_deg": float(diff.max()) if len(diff) else None},
+        "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
+        "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
+        "quasi_static_note": "kinetic energy of the free fabric over the bond strain energy "
+                             "and over the work done so far, after the smooth start and the "
+                             "first tenth of the displacement",
+        "energy_balance": energy_balance(out),
+    }
+    ke = summary["max_kinetic_to_strain_energy"]
+    plots = [
+        {"path": "curve.png",
+         "series": [{"x": 1e3 * d, "y": force, "label": "clamp force"}],
+         "xlabel": "displacement d [mm]", "ylabel": "force [N]", "title": "Bias extension",
+         "notes": f"H {1e3 * h:.1f} mm, W {1e3 * w:.1f} mm"
+                  f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
+                  f"\n{model.n_beads} beads"},
+        {"path": "shear_angle.png",
+         "series": [{"x": 1e3 * d, "y": gamma, "label": "closed form (L0 = H - W)"},
+                    {"x": 1e3 * np.interp(steps, out["step"], d), "y": fibre_gamma,
+                     "style": "o", "label": "fibres, central zone"}],
+         "xlabel": "displacement d [mm]", "ylabel": "central shear angle γ [deg]",
+         "title": "Bias extension: central-zone shear angle"},
+    ]
+    return DrivenResult(Path(run_dir), curve, summary, plots)

@@ -1,0 +1,309 @@
+"""What every displacement-driven quasi-static test shares.
+
+A driven test (tension, picture frame, bias extension, periodic cells) moves a
+boundary — clamps or the periodic box — at a constant speed reached by a smooth
+start (:class:`~fabmd.scene.loading.SmoothStartSpeed`), damps the free beads
+viscously (γ = m/τ) and writes, through ``lammps_templates/driven_outputs.lmp``:
+
+* ``means.dat`` — forces and powers averaged over each output interval (exact
+  integrals of the external and the damping power);
+* ``curve.dat`` — clock, boundary displacement(s) and energies at the output steps.
+
+:class:`DrivenTest` is a mixin for the protocols' frozen dataclasses: it turns
+their ``speed_fraction``, ``ramp_fraction``, ``damping_time_s``, ``contact``,
+``time_step`` and ``samples`` fields plus the protocol's travel into the loading,
+the time step, the output interval and the step count, and its :meth:`run`
+writes the run folder, runs it with the contact-power monitor, reduces it, and
+with ``check_rate`` reruns at half speed and reports how much the curve moved.
+:func:`read_outputs`, :func:`energy_columns`, :func:`kinetic_ratio` assemble the
+quasi-static evidence the same way for every protocol.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from ..engine import Engine, mpi
+from ..model.bead_model import BeadModel
+from ..model.beads import model_bead_parameters
+from ..results.curves import curve_difference
+from ..results.folder import read_ave_time, read_print_file, write_csv, write_json
+from ..results.plots import plot_curves
+from ..scene import blocks
+from ..scene.energy import ContactPower, balance, cumulative
+from ..scene.loading import SmoothStartSpeed
+from ..scene.templates import render
+from .common import input_name, resume_folder, scene_dict, write_run_folder
+
+#: trajectory file every driven test writes (LAMMPS dump, sorted by id)
+TRAJECTORY = "trajectory.lammpstrj"
+
+
+@dataclass
+class DrivenResult:
+    """Curve, summary and plots of a driven test.
+
+    ``plots`` holds keyword sets for :func:`fabmd.results.plots.plot_curves`
+    (``path`` relative to the run folder).
+    """
+
+    run_dir: Path
+    curve: dict[str, np.ndarray]
+    summary: dict
+    plots: list[dict] = field(default_factory=list)
+
+    def write(self) -> None:
+        write_csv(self.run_dir / "curve.csv", self.curve)
+        write_json(self.run_dir / "summary.json", self.summary)
+        for spec in self.plots:
+            spec = dict(spec)
+            plot_curves(self.run_dir / spec.pop("path"), **spec)
+
+
+class DrivenTest:
+    """Mixin of the displacement-driven protocols (see the module docstring).
+
+    A subclass is a frozen dataclass with the fields named above and defines
+    ``protocol``, ``rate_curve`` (x and y columns compared by ``check_rate``),
+    ``rate_keys`` (summary keys compared by ``check_rate``: {report name: key}),
+    :meth:`travel_m`, :meth:`input_text` and :meth:`reduce`.
+    """
+
+    protocol: ClassVar[str] = ""
+    rate_curve: ClassVar[tuple[str, str]] = ("", "")
+    rate_keys: ClassVar[dict[str, str]] = {}
+
+    # -- to be defined by the protocol ---------------------------------------------
+    def travel_m(self, model: BeadModel) -> float:
+        """Distance the driven boundary moves at the loading speed [m]."""
+        raise NotImplementedError
+
+    def input_text(self, model: BeadModel) -> str:
+        raise NotImplementedError
+
+    def reduce(self, run_dir: Path, model: BeadModel,
+               monitor: ContactPower | None = None) -> DrivenResult:
+        raise NotImplementedError
+
+    def prepare(self, model: BeadModel) -> BeadModel:
+        """The model the run starts from (validated; a protocol may add bond types)."""
+        return model
+
+    def make_monitor(self) -> ContactPower:
+        return ContactPower()
+
+    # -- loading and time ------------------------------------------------------------
+    def wave_speed_m_s(self, model: BeadModel) -> float:
+        """Slowest axial wave speed of the fibres, c = l0·sqrt(k/m) [m/s]."""
+        return min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
+                   for b in model_bead_parameters(model))
+
+    def nominal_loading(self, model: BeadModel) -> SmoothStartSpeed:
+        """Boundary speed ``speed_fraction``·c, reached smoothly over ``ramp_fraction``."""
+        v = self.speed_fraction * self.wave_speed_m_s(model)
+        total = self.travel_m(model) / v
+        return SmoothStartSpeed(v, self.ramp_fraction * total / (1 - self.ramp_fraction / 2))
+
+    def loading(self, model: BeadModel) -> SmoothStartSpeed:
+        """The nominal loading, a hair slower (less than one output interval over the test)
+        so that the travel ends exactly on the last step, the last sample."""
+        k = self.duration_s(model) / (self.steps(model) * self.time_step_s(model))
+        nominal = self.nominal_loading(model)
+        return SmoothStartSpeed(nominal.speed_m_s * k, nominal.ramp_time_s / k)
+
+    def duration_s(self, model: BeadModel) -> float:
+        """Nominal duration of the loading [s]."""
+        return self.nominal_loading(model).time_for(self.travel_m(model))
+
+    def time_step_s(self, model: BeadModel) -> float:
+        beads = model_bead_parameters(model)
+        kn = self.contact.stability_stiffness_n_per_m(beads)
+        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+
+    def every(self, model: BeadModel) -> int:
+        raw = math.ceil(self.duration_s(model) / self.time_step_s(model))
+        return max(1, raw // self.samples)
+
+    def steps(self, model: BeadModel) -> int:
+        """Whole output intervals, so that the last sample is the end of the test."""
+        every = self.every(model)
+        return every * math.ceil(self.duration_s(model) / self.time_step_s(model) / every)
+
+    def gamma(self, model: BeadModel) -> float:
+        """Viscous damping coefficient γ = m/τ [kg/s] (τ default: a tenth of the test)."""
+        tau = self.damping_time_s or self.duration_s(model) / 10
+        return float(np.median(model.masses)) / tau
+
+    def trajectory_every(self, model: BeadModel, frames: int) -> int:
+        """Dump interval giving about ``frames`` trajectory frames (a multiple of every)."""
+        every = self.every(model)
+        return every * max(1, math.ceil(self.steps(model) / every / max(frames, 1)))
+
+    def relax_block(self, model: BeadModel, held: str, free: str,
+                    reference_force_n: float) -> str:
+        """Free relaxation with ``held`` fixed until quasi-static (``self.relax``)."""
+        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        return blocks.relax(model, self.time_step_s(model), held, free, self.relax,
+                            reference_force_n, model.n_bonds * reference_force_n**2 / (2 * k))
+
+    def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
+                      mean_values: str = "", mean_names: str = "", print_values: str = "",
+                      print_names: str = "", thermo_values: str = "") -> str:
+        """Interval means, printed curve and thermo (``driven_outputs.lmp``)."""
+        every = self.every(model)
+        strain = "ebond+eangle" if len(model.angles) else "ebond"
+        return render("driven_outputs", external_power=external_power, strain_energy=strain,
+                      external_ref=external_ref, gamma=self.gamma(model), every=every,
+                      mean_values=mean_values, mean_names=mean_names,
+                      print_values=print_values, print_names=print_names,
+                      thermo_values=thermo_values,
+                      thermo_every=max(every, self.steps(model) // 20))
+
+    # -- run ------------------------------------------------------------------------
+    def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
+            overwrite: bool = False, check_rate: bool = False, resume: bool = False,
+            monitor: ContactPower | None = None) -> DrivenResult:
+        """Run the test on ``model``.
+
+        Args:
+            check_rate: rerun at half speed and report how much the curve moved.
+            resume: continue an interrupted run in ``out`` from its last checkpoint
+                (``Engine(checkpoint_every=...)`` writes them).
+            monitor: the contact-power monitor (default: a new one).
+        """
+        engine = engine or Engine()
+        start = self.prepare(model)
+        text = self.input_text(start)  # validates before anything is written
+        if resume:
+            run_dir = resume_folder(out)
+        else:
+            run_dir = write_run_folder(out, self.protocol, start, text,
+                                       {self.protocol: scene_dict(self)}, overwrite=overwrite)
+        monitor = monitor or self.make_monitor()
+        run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
+                         monitor=monitor, monitor_every=self.every(start), resume=resume)
+        result = None
+        if mpi.is_root():
+            result = self.reduce(run_dir, start, monitor)
+            result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
+        if check_rate:
+            slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
+            other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
+            if mpi.is_root():
+                result.summary["rate_check"] = self.compare_rates(result, other)
+        if mpi.is_root():
+            result.write()
+        summary = mpi.bcast_json(result.summary if result else None)
+        if result is None:
+            result = DrivenResult(Path(run_dir), {}, summary)
+        result.summary = summary
+        return result
+
+    def compare_rates(self, fast: DrivenResult, slow: DrivenResult) -> dict:
+        """How much the curve and the named summary values moved at half speed."""
+        x, y = self.rate_curve
+        report = {"half_speed_run": str(slow.run_dir),
+                  "max_relative_force_change": curve_difference(
+                      fast.curve[x], fast.curve[y], slow.curve[x], slow.curve[y]),
+                  "compared": f"{y} against {x}, above a fifth of the common range"}
+        for name, key in self.rate_keys.items():
+            report[name] = relative_change(slow.summary.get(key), fast.summary.get(key))
+        if "wall_s" in slow.summary:
+            report["half_speed_wall_s"] = slow.summary["wall_s"]
+        return report
+
+
+def relative_change(a, b) -> float | None:
+    """|a − b| / |b| (None when either is missing or b is 0)."""
+    if a is None or b is None or not b:
+        return None
+    return abs(a - b) / abs(b)
+
+
+# -- reading a driven run back ----------------------------------------------------------
+@dataclass
+class Outputs:
+    """``curve.dat`` columns, with the interval means of ``means.dat`` put on its steps
+    (a mean is reported at its interval's end; 0 at step 0) and the cumulative works."""
+
+    columns: dict[str, np.ndarray]
+    means: dict[str, np.ndarray]
+    external_work_j: np.ndarray
+    damping_j: np.ndarray
+    contact_j: np.ndarray | None
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+
+def read_outputs(run_dir: Path, every: int, dt: float,
+                 monitor: ContactPower | None = None) -> Outputs:
+    """Read ``curve.dat`` and ``means.dat`` of a driven run."""
+    raw = read_print_file(Path(run_dir) / "curve.dat")
+    means = read_ave_time(Path(run_dir) / "means.dat")
+    for name in means:
+        if name != "step":
+            raw[name] = np.interp(raw["step"], means["step"], means[name], left=0.0)
+    external = np.interp(raw["step"], means["step"],
+                         cumulative(means["external_power_w"], every, dt), left=0.0)
+    damping = np.interp(raw["step"], means["step"],
+                        cumulative(means["damping_power_w"], every, dt), left=0.0)
+    contact = monitor.work_j(raw["step"], dt) if monitor is not None else None
+    return Outputs(raw, means, external, damping, contact)
+
+
+def energy_columns(out: Outputs) -> dict[str, np.ndarray]:
+    """The energy columns every driven curve carries."""
+    cols = {"kinetic_energy_j": out["kinetic_j"], "strain_energy_j": out["strain_energy_j"],
+            "external_work_j": out.external_work_j, "damping_dissipation_j": out.damping_j}
+    if out.contact_j is not None:
+        cols["contact_work_j"] = out.contact_j
+    return cols
+
+
+def energy_balance(out: Outputs) -> dict:
+    """External work = Δ strain + Δ kinetic + damping + contact work, closing error."""
+    return balance(out.external_work_j, out["strain_energy_j"], out["kinetic_j"],
+                   out.damping_j, out.contact_j)
+
+
+def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
+    """Largest kinetic / strain energy after start-up (None when nothing is started)."""
+    ratio = out["kinetic_j"][started] / np.maximum(out["strain_energy_j"][started], 1e-300)
+    return float(ratio.max()) if ratio.size else None
+
+
+def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
+    """Largest kinetic energy / external work done so far, after start-up."""
+    ratio = out["kinetic_j"][started] / np.maximum(np.abs(out.external_work_j[started]), 1e-300)
+    return float(ratio.max()) if ratio.size else None
+
+
+STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "
+                "tenth of the test, and once the strain energy gained exceeds 1 % of its final "
+                "gain (a slack fabric carries no load at first)")
+
+
+def started_mask(out: Outputs, loading: SmoothStartSpeed, progress: np.ndarray,
+                 fraction: float = 0.1) -> np.ndarray:
+    """After start-up (see :data:`STARTED_NOTE`); ``progress`` of the test in [0, 1]."""
+    u = out["strain_energy_j"]
+    loaded = (u - u[0]) > 0.01 * (u[-1] - u[0])
+    return (out["time_s"] > loading.ramp_time_s) & (np.asarray(progress) > fraction) & loaded
+
+
+def clamp_power(group: str = "clamps") -> tuple[str, str]:
+    """(LAMMPS text, reference) of the power put in through the beads of ``group``."""
+    return render("clamp_power", group=group), "c_p_ext"
+
+
+def trajectory_commands(every: int) -> str:
+    """A dump of every bead (id, fibre, type, position) for viewing and central-zone
+    measures."""
+    return render("trajectory", every=every, file=TRAJECTORY)

@@ -1,0 +1,357 @@
+"""Periodic unit cell tests: tension and trellis (pure) shear by box deformation.
+
+A fabric cell periodic in x and y (e.g. ``Crimp().run(plain_weave_cell()).model``)
+is loaded by deforming its box (``fix deform``, ``remap v``): no clamps and no
+edges. The beads are not remapped; the box drags them through the fibres and
+contacts that cross its faces, and every relative motion the contacts see is a
+real one (with ``remap x`` the tangential springs would miss the affine slip).
+
+* :class:`PeriodicTension` stretches the box along x (warp); the transverse size
+  is held (default) or left free (``transverse="free"``: ``fix press/berendsen``
+  drives the transverse membrane force to zero).
+* :class:`PeriodicShear` is the picture frame of an infinite fabric: both fibre
+  families keep their length — the cell edge along x stays, the other edge
+  (length b) turns by γ (ly = b·cos γ, xy = b·sin γ) — so the shear angle between
+  the families is γ.
+
+Membrane forces per unit length come from the virial, N = −P·V/(lx·ly) = −P·lz,
+so the arbitrary z size of the box cancels. The power of the box deformation,
+−V·P:L + Σ F_i·(L·x_i) (L = ḣ·h⁻¹), is integrated exactly per output interval for
+the energy balance; for the shear cell it gives the same normalised shear force
+as the picture frame, F_norm = ΔW/(A0·Δ sin γ) (power per initial area over cos γ·γ̇).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from .. import inputs
+from ..errors import InputError
+from ..model.bead_model import BeadModel
+from ..model.beads import TimeStep, model_bead_parameters
+from ..model.contact import ContactModel
+from ..results.curves import bilinear_fit, tangent_intersection, values_at
+from ..scene import blocks
+from ..scene.energy import ContactPower
+from ..scene.quasi_static import QuasiStatic
+from ..scene.templates import fmt, render
+from .common import DATA_FILE
+from .driven import (
+    DrivenResult,
+    DrivenTest,
+    energy_balance,
+    energy_columns,
+    kinetic_ratio,
+    kinetic_to_work_ratio,
+    read_outputs,
+    started_mask,
+    trajectory_commands,
+)
+from .picture_frame import interval_force
+
+TRANSVERSE = ("held", "free")
+
+
+def check_periodic_cell(model: BeadModel, who: str) -> None:
+    if not (model.periodic[0] and model.periodic[1]):
+        raise InputError(f"{who} needs a cell periodic in x and y (a unit cell, e.g. from "
+                         f"Crimp().run(...) on a periodic fabric), got periodic = "
+                         f"{tuple(model.periodic)}; use the coupon tests for finite pieces")
+
+
+@dataclass(frozen=True)
+class _PeriodicCellTest(DrivenTest):
+    """Box-deformation test of a periodic cell (shared machinery)."""
+
+    title: ClassVar[str] = ""
+
+    def cell(self, model: BeadModel) -> tuple[float, float, float]:
+        """(lx, ly, lz) of the box [m]."""
+        size = model.box_hi - model.box_lo
+        return float(size[0]), float(size[1]), float(size[2])
+
+    def prepare(self, model: BeadModel) -> BeadModel:
+        check_periodic_cell(model, self.protocol)
+        return model
+
+    def box_motion(self, model: BeadModel) -> str:
+        raise NotImplementedError
+
+    def transverse_block(self, model: BeadModel) -> str:
+        return "# transverse size held"
+
+    def input_text(self, model: BeadModel) -> str:
+        check_periodic_cell(model, self.protocol)
+        dt = self.time_step_s(model)
+        beads = model_bead_parameters(model)
+        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        outputs = self.outputs_block(
+            model, "# power of the box deformation: v_p_box (above)", "v_p_box",
+            mean_values="v_nxx v_nyy v_nxy",
+            mean_names="n_xx_n_m n_yy_n_m n_xy_n_m",
+            print_values="${s} $(lx:%.12g) $(ly:%.12g) $(xy:%.12g)",
+            print_names="boundary_travel_m box_lx_m box_ly_m box_xy_m",
+            thermo_values="v_s lx ly xy v_nxx v_nyy v_nxy")
+        text = render("periodic_cell", title=self.title,
+                      relax=self.relax_block(model, "clamps", "free", 1e-3 * ea),
+                      box_motion=self.box_motion(model),
+                      transverse=self.transverse_block(model), gamma=self.gamma(model),
+                      outputs=outputs)
+        return "\n".join([
+            blocks.setup(model, self.protocol, DATA_FILE, dt),
+            blocks.bonds(model),
+            blocks.contact(model, self.contact, beads),
+            text,
+            ContactPower.commands(),
+            trajectory_commands(self.trajectory_every(model, self.trajectory_frames)),
+            blocks.guards(model, dt),
+            render("run", steps=self.steps(model)),
+            render("finish", final_data="final.data"),
+        ])
+
+    def _schedule(self, model: BeadModel) -> str:
+        load = self.loading(model)
+        return (f'variable        s equal "{load.lammps_displacement()}"\n'
+                f'variable        s_rate equal "{load.lammps_velocity()}"')
+
+    def _common_summary(self, model: BeadModel, out, progress) -> dict:
+        started = started_mask(out, self.loading(model), progress)
+        lx, ly, lz = self.cell(model)
+        return {
+            "protocol": self.protocol,
+            "n_beads": model.n_beads,
+            "cell_m": [lx, ly],
+            "time_step_s": self.time_step_s(model),
+            "steps": self.steps(model),
+            "boundary_speed_m_s": self.loading(model).speed_m_s,
+            "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
+            "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
+            "quasi_static_note": "kinetic energy over the bond strain energy and over the "
+                                 "work done so far, after the smooth start and the first "
+                                 "tenth of the test",
+            "energy_balance": energy_balance(out),
+        }
+
+
+@dataclass(frozen=True)
+class PeriodicTension(_PeriodicCellTest):
+    """Uniaxial tension of a periodic cell along x by box deformation.
+
+    Args:
+        max_strain_pct: box strain along x at the end [%], (0, 50].
+        transverse: ``"held"`` (ly fixed) or ``"free"`` (zero transverse membrane force,
+            ``fix press/berendsen`` on y; its box work is not in the energy balance).
+        transverse_damping_fraction: Berendsen time constant over the test duration.
+        speed_fraction: speed of the moving box face over the fibres' axial wave speed.
+        ramp_fraction, damping_time_s, contact, time_step, samples, relax: as for tension.
+        trajectory_frames: frames written to ``trajectory.lammpstrj``.
+        report_strains_pct: strains at which N_xx is reported.
+    """
+
+    max_strain_pct: float = 2.0
+    transverse: str = "held"
+    transverse_damping_fraction: float = 0.1
+    speed_fraction: float = 2e-4
+    ramp_fraction: float = 0.1
+    damping_time_s: float | None = None
+    contact: ContactModel = field(default_factory=ContactModel)
+    time_step: TimeStep = field(default_factory=TimeStep)
+    samples: int = 100
+    trajectory_frames: int = 10
+    report_strains_pct: tuple[float, ...] = (0.5, 1.0)
+    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+
+    protocol: ClassVar[str] = "periodic_tension"
+    title: ClassVar[str] = "uniaxial tension along x"
+    rate_curve: ClassVar[tuple[str, str]] = ("strain_pct", "force_per_width_n_m")
+    rate_keys: ClassVar[dict[str, str]] = {
+        "initial_stiffness_change": "initial_stiffness_n_m_per_width"}
+
+    def __post_init__(self):
+        inputs.in_range("periodic_tension.max_strain_pct", self.max_strain_pct, 0, 50,
+                        low_open=True)
+        inputs.one_of("periodic_tension.transverse", self.transverse, TRANSVERSE)
+        inputs.in_range("periodic_tension.transverse_damping_fraction",
+                        self.transverse_damping_fraction, 0, 1, low_open=True)
+        inputs.in_range("periodic_tension.speed_fraction", self.speed_fraction, 0, 0.05,
+                        low_open=True)
+        inputs.in_range("periodic_tension.ramp_fraction", self.ramp_fraction, 0, 0.9)
+        if self.damping_time_s is not None:
+            inputs.positive("periodic_tension.damping_time_s", self.damping_time_s)
+        inputs.positive_int("periodic_tension.samples", self.samples, minimum=10)
+        inputs.positive_int("periodic_tension.trajectory_frames", self.trajectory_frames)
+
+    def travel_m(self, model: BeadModel) -> float:
+        return self.cell(model)[0] * self.max_strain_pct / 100
+
+    def box_motion(self, model: BeadModel) -> str:
+        return "\n".join([
+            "# the box grows along x: lx = lx0 + s(t)",
+            self._schedule(model),
+            "variable        rate_lx equal v_s_rate",
+            "variable        rate_ly equal 0.0",
+            "variable        rate_xy equal 0.0",
+            "fix             box all deform 1 x variable v_s v_s_rate remap v",
+        ])
+
+    def transverse_block(self, model: BeadModel) -> str:
+        if self.transverse == "held":
+            return "# transverse size held (ly fixed)"
+        lx, ly, lz = self.cell(model)
+        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        n_fibres = max(model.n_fibres, 1)
+        # Berendsen's modulus: a tenth of all fibres' E·A over the cell section (a
+        # crimped fabric is far softer across than its fibres; a low guess relaxes faster
+        # and stays stable while the time constant is many time steps)
+        modulus = 0.1 * n_fibres * ea / (ly * lz)
+        pdamp = self.transverse_damping_fraction * self.duration_s(model)
+        settle = math.ceil(10 * pdamp / self.time_step_s(model))
+        return "\n".join([
+            "# transverse membrane force driven to zero: the box's y size follows (Berendsen);",
+            "# no bead is dilated (empty group, dilate partial): the box drags them.",
+            "# Before the test it settles for ten time constants (damped), so that the test",
+            "# starts from zero transverse force",
+            "group           nobody empty",
+            f"fix             transverse nobody press/berendsen y 0.0 0.0 {fmt(pdamp)} "
+            f"modulus {fmt(modulus)} dilate partial",
+            "fix             settle_damping free damping/cundall 0.7 0.0",
+            f"run             {settle}",
+            "unfix           settle_damping",
+        ])
+
+    def reduce(self, run_dir: Path, model: BeadModel,
+               monitor: ContactPower | None = None) -> DrivenResult:
+        out = read_outputs(run_dir, self.every(model), self.time_step_s(model), monitor)
+        lx0, ly0, _ = self.cell(model)
+        strain = (out["box_lx_m"] - lx0) / lx0
+        nxx = out["n_xx_n_m"]
+        curve = {"time_s": out["time_s"], "strain_pct": 100 * strain,
+                 "force_per_width_n_m": nxx, "transverse_force_per_width_n_m": out["n_yy_n_m"],
+                 "box_ly_m": out["box_ly_m"], **energy_columns(out)}
+        fit = bilinear_fit(100 * strain, nxx)
+        # tangents: 10-40 % of the strain range (past the smooth start) and the last 20 %
+        tangents = tangent_intersection(strain, nxx, initial=(0.1, 0.4), final=0.2)
+        summary = self._common_summary(model, out, strain / (self.max_strain_pct / 100))
+        summary.update({
+            "transverse": self.transverse,
+            "width_m": ly0,
+            "initial_stiffness_n_m_per_width": tangents["initial_slope"],  # per unit strain
+            "final_stiffness_n_m_per_width": tangents["final_slope"],
+            "stiffness_note": "slopes of N_xx against strain fitted over 10-40 % and over the "
+                              "last 20 % of the strain range",
+            "bilinear_transition_strain_pct": fit["break_x"],
+            "force_per_width_at_strain_n_m": {f"{k:g}": v for k, v in values_at(
+                100 * strain, nxx, self.report_strains_pct).items()},
+            "max_abs_transverse_force_per_width_n_m": float(np.abs(out["n_yy_n_m"]).max()),
+            "transverse_strain_pct": float(100 * (out["box_ly_m"][-1] - ly0) / ly0),
+        })
+        if self.transverse == "free":
+            summary["energy_balance"]["note"] = (
+                "the work of the Berendsen barostat on the box y size is not counted "
+                "(it drives the transverse force to zero)")
+        plot = {"path": "curve.png",
+                "series": [{"x": 100 * strain, "y": nxx, "label": "N_xx (virial)"}],
+                "xlabel": "strain [%]", "ylabel": "membrane force per width [N/m]",
+                "title": f"Periodic cell: tension (transverse {self.transverse})",
+                "notes": f"cell {1e3 * lx0:.2f} x {1e3 * ly0:.2f} mm\n{model.n_beads} beads"}
+        return DrivenResult(Path(run_dir), curve, summary, [plot])
+
+
+@dataclass(frozen=True)
+class PeriodicShear(_PeriodicCellTest):
+    """Trellis (pure) shear of a periodic cell: both fibre families keep their length.
+
+    Args:
+        max_shear_angle_deg: shear angle γ at the end [deg], (0, 70].
+        speed_fraction: speed of the turning cell edge (b·γ̇) over the fibres' axial
+            wave speed.
+        ramp_fraction, damping_time_s, contact, time_step, samples, relax: as for tension.
+        trajectory_frames: frames written to ``trajectory.lammpstrj``.
+        report_angles_deg: shear angles at which forces are reported.
+    """
+
+    max_shear_angle_deg: float = 40.0
+    speed_fraction: float = 1e-3
+    ramp_fraction: float = 0.1
+    damping_time_s: float | None = None
+    contact: ContactModel = field(default_factory=ContactModel)
+    time_step: TimeStep = field(default_factory=TimeStep)
+    samples: int = 100
+    trajectory_frames: int = 10
+    report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
+    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+
+    protocol: ClassVar[str] = "periodic_shear"
+    title: ClassVar[str] = "trellis shear"
+    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys: ClassVar[dict[str, str]] = {
+        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
+
+    def __post_init__(self):
+        inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
+                        low_open=True)
+        inputs.in_range("periodic_shear.speed_fraction", self.speed_fraction, 0, 0.05,
+                        low_open=True)
+        inputs.in_range("periodic_shear.ramp_fraction", self.ramp_fraction, 0, 0.9)
+        if self.damping_time_s is not None:
+            inputs.positive("periodic_shear.damping_time_s", self.damping_time_s)
+        inputs.positive_int("periodic_shear.samples", self.samples, minimum=10)
+        inputs.positive_int("periodic_shear.trajectory_frames", self.trajectory_frames)
+
+    def travel_m(self, model: BeadModel) -> float:
+        """Arc the turning edge's end travels, b·γ [m]."""
+        return self.cell(model)[1] * math.radians(self.max_shear_angle_deg)
+
+    def box_motion(self, model: BeadModel) -> str:
+        b = fmt(self.cell(model)[1])
+        return "\n".join([
+            "# the edge along y (length b) turns by gamma = s(t)/b: ly = b cos(gamma),",
+            "# xy = b sin(gamma); the edge along x stays: both fibre families keep their length",
+            "change_box      all triclinic",
+            self._schedule(model),
+            f'variable        gam equal "v_s/{b}"',
+            f'variable        gam_rate equal "v_s_rate/{b}"',
+            f'variable        dly equal "{b}*(cos(v_gam)-1)"',
+            f'variable        dxy equal "{b}*sin(v_gam)"',
+            "variable        rate_lx equal 0.0",
+            f'variable        rate_ly equal "-{b}*sin(v_gam)*v_gam_rate"',
+            f'variable        rate_xy equal "{b}*cos(v_gam)*v_gam_rate"',
+            "fix             box all deform 1 y variable v_dly v_rate_ly "
+            "xy variable v_dxy v_rate_xy remap v flip no",
+        ])
+
+    def reduce(self, run_dir: Path, model: BeadModel,
+               monitor: ContactPower | None = None) -> DrivenResult:
+        out = read_outputs(run_dir, self.every(model), self.time_step_s(model), monitor)
+        lx0, ly0, _ = self.cell(model)
+        gamma = np.arctan2(out["box_xy_m"], out["box_ly_m"])
+        # F_norm = power per initial area / (cos γ γ̇): work over A0·Δ(sin γ) per interval
+        fnorm = interval_force(np.sin(gamma), out.external_work_j) / (lx0 * ly0)
+        deg = np.degrees(gamma)
+        curve = {"time_s": out["time_s"], "shear_angle_deg": deg, "normalised_force_n_m": fnorm,
+                 "shear_force_per_length_n_m": out["n_xy_n_m"], **energy_columns(out)}
+        valid = deg > 0.02 * deg.max()
+        lock = tangent_intersection(deg[valid], fnorm[valid])
+        initial = tangent_intersection(gamma[valid], fnorm[valid])["initial_slope"]
+        summary = self._common_summary(model, out, deg / self.max_shear_angle_deg)
+        summary.update({
+            "initial_shear_stiffness_n_m_per_rad": initial,
+            "locking_angle_deg": lock["x"] if lock["found"] else None,
+            "locking": lock,
+            "normalised_force_at_angle_n_m": {f"{k:g}": v for k, v in values_at(
+                deg, fnorm, self.report_angles_deg).items()},
+            "max_normalised_force_n_m": float(fnorm.max()),
+        })
+        plot = {"path": "curve.png",
+                "series": [{"x": deg, "y": fnorm, "label": "F_norm (power / A0 cos γ γ̇)"},
+                           {"x": deg, "y": out["n_xy_n_m"], "style": "--",
+                            "label": "N_xy (virial)"}],
+                "xlabel": "shear angle γ [deg]", "ylabel": "shear force per length [N/m]",
+                "title": "Periodic cell: trellis shear",
+                "notes": f"cell {1e3 * lx0:.2f} x {1e3 * ly0:.2f} mm\n{model.n_beads} beads"}
+        return DrivenResult(Path(run_dir), curve, summary, [plot])

@@ -1,0 +1,432 @@
+"""Picture-frame (trellis-frame) shear of a square coupon.
+
+The coupon (warp along x, weft along y) sits centred in a rigid frame of four
+arms of length L_frame pinned at the corners. Pin A is fixed; the opposite pin C
+is pulled along the diagonal by d (smooth start, then constant speed). With
+cos θ = (√2·L_frame + d)/(2·L_frame) the arms point along e1 = rot(u, −θ) and
+e2 = rot(u, +θ) (u the diagonal), and the shear angle is γ = 90° − 2θ.
+
+The beads of the clamped strips along the four edges move affinely with the
+frame, x = A + ξ·e1 + η·e2 ((ξ, η) their position relative to A before the
+test), and keep their z (``fix store/state`` + ``fix move variable`` with
+displacement and velocity); the unclamped fabric inside is free. The frame force
+follows from the power balance F·ḋ = −Σ_clamped f·v, integrated exactly over each
+output interval: F = ΔW/Δd. Reported the standard way (Harrison et al. 2004):
+F_s = F/(2 cos θ) and F_norm = F_s·L_frame/L_fabric², L_fabric the side of the
+fabric in the frame (in this model the clamped strips shear with the frame, so
+the whole coupon is the sheared area). The shear-locking angle is where the
+tangents of the low initial part and the steep final part of F_norm(γ) meet.
+
+``pretension_strain`` is a clamping preload: the rest length of the bonds of the
+unclamped fibres shrinks by that strain (ramped, clamps held) before the free
+relaxation, and stays shorter for the test.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from .. import inputs
+from ..errors import InputError
+from ..model.bead_model import BeadModel, BondType
+from ..model.beads import TimeStep, model_bead_parameters
+from ..model.contact import ContactModel
+from ..results.curves import tangent_intersection, values_at
+from ..results.fibre_angles import family_axes_deg, read_dump, shear_angle_deg, zone_mask
+from ..scene import blocks
+from ..scene.energy import ContactPower
+from ..scene.quasi_static import QuasiStatic
+from ..scene.templates import fmt, render
+from .common import DATA_FILE
+from .driven import (
+    TRAJECTORY,
+    DrivenResult,
+    DrivenTest,
+    clamp_power,
+    energy_balance,
+    energy_columns,
+    kinetic_ratio,
+    kinetic_to_work_ratio,
+    read_outputs,
+    started_mask,
+    trajectory_commands,
+)
+
+PROTOCOL = "picture_frame"
+
+
+# -- frame kinematics and the standard normalisation (closed form) -----------------------
+def frame_angle_rad(displacement_m, frame_length_m: float):
+    """Half the angle between the arms at the pulled corner, θ [rad]:
+    cos θ = (√2·L + d)/(2·L)."""
+    return np.arccos((math.sqrt(2) * frame_length_m + np.asarray(displacement_m, float))
+                     / (2 * frame_length_m))
+
+
+def shear_angle_from_displacement_deg(displacement_m, frame_length_m: float):
+    """Shear angle γ = 90° − 2θ of a picture frame [deg]."""
+    return 90.0 - 2.0 * np.degrees(frame_angle_rad(displacement_m, frame_length_m))
+
+
+def displacement_for_shear_angle_m(shear_angle_deg, frame_length_m: float):
+    """Corner displacement d that gives shear angle γ: d = 2·L·cos(45° − γ/2) − √2·L [m]."""
+    theta = np.radians(45.0 - np.asarray(shear_angle_deg, float) / 2)
+    return 2 * frame_length_m * np.cos(theta) - math.sqrt(2) * frame_length_m
+
+
+def shear_force_n(frame_force_n, displacement_m, frame_length_m: float):
+    """Shear force along the arms, F_s = F/(2 cos θ) [N]."""
+    return np.asarray(frame_force_n, float) / (
+        2 * np.cos(frame_angle_rad(displacement_m, frame_length_m)))
+
+
+def normalised_shear_force_n_m(shear_force, frame_length_m: float, fabric_length_m: float):
+    """F_norm = F_s·L_frame/L_fabric² [N/m] (Harrison et al. 2004): frames of any size compare."""
+    return np.asarray(shear_force, float) * frame_length_m / fabric_length_m**2
+
+
+@dataclass(frozen=True)
+class FrameGeometry:
+    """Where the frame and its clamps are on a coupon (all in m)."""
+
+    pin_a: tuple[float, float]
+    frame_length_m: float
+    fabric_length_m: float
+    clamp_width_m: float
+    inner: tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi of the free fabric
+    centre: tuple[float, float]
+    free_side_m: float
+
+
+@dataclass(frozen=True)
+class PictureFrame(DrivenTest):
+    """Picture-frame shear test of a square coupon (warp along x, weft along y).
+
+    Args:
+        max_shear_angle_deg: shear angle at the end of the test [deg], (0, 80].
+        max_displacement_m: corner displacement at the end [m]; overrides the angle.
+        frame_length_m: arm length pin to pin [m]; default 5 % longer than the fabric side.
+        clamp_width_m: width of the clamped strip along each edge [m]; default a tenth
+            of the fabric side.
+        pretension_strain: clamping preload: rest-length shrink of the unclamped fibres,
+            in [0, 0.05).
+        pretension_transits: duration of the preload ramp in axial wave transits of the
+            longest fibre.
+        speed_fraction: speed of the pulled corner over the fibres' axial wave speed
+            (default 1e-3: on the example coupon halving it changes the curve by < 0.1 %;
+            check with ``check_rate``).
+        ramp_fraction: share of the test spent reaching full speed smoothly.
+        damping_time_s: τ of the viscous damping γ = m/τ of the free fabric (default:
+            a tenth of the test).
+        contact: fibre–fibre contact.
+        time_step: time-step policy.
+        samples: curve points.
+        trajectory_frames: frames written to ``trajectory.lammpstrj``.
+        report_angles_deg: shear angles at which forces are reported.
+        relax: stop criterion of the free relaxation before the test (clamps held).
+    """
+
+    max_shear_angle_deg: float = 60.0
+    max_displacement_m: float | None = None
+    frame_length_m: float | None = None
+    clamp_width_m: float | None = None
+    pretension_strain: float = 0.0
+    pretension_transits: float = 20.0
+    speed_fraction: float = 1e-3
+    ramp_fraction: float = 0.1
+    damping_time_s: float | None = None
+    contact: ContactModel = field(default_factory=ContactModel)
+    time_step: TimeStep = field(default_factory=TimeStep)
+    samples: int = 200
+    trajectory_frames: int = 20
+    report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
+    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+
+    protocol: ClassVar[str] = PROTOCOL
+    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys: ClassVar[dict[str, str]] = {
+        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
+        "locking_angle_change": "locking_angle_deg"}
+
+    def __post_init__(self):
+        inputs.in_range("picture_frame.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
+                        low_open=True)
+        if self.max_displacement_m is not None:
+            inputs.positive("picture_frame.max_displacement_m", self.max_displacement_m)
+        if self.frame_length_m is not None:
+            inputs.positive("picture_frame.frame_length_m", self.frame_length_m)
+        if self.clamp_width_m is not None:
+            inputs.positive("picture_frame.clamp_width_m", self.clamp_width_m)
+        inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, 0, 0.05,
+                        high_open=True)
+        inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
+        inputs.in_range("picture_frame.speed_fraction", self.speed_fraction, 0, 0.05,
+                        low_open=True)
+        inputs.in_range("picture_frame.ramp_fraction", self.ramp_fraction, 0, 0.9)
+        if self.damping_time_s is not None:
+            inputs.positive("picture_frame.damping_time_s", self.damping_time_s)
+        inputs.positive_int("picture_frame.samples", self.samples, minimum=10)
+        inputs.positive_int("picture_frame.trajectory_frames", self.trajectory_frames)
+        for a in self.report_angles_deg:
+            inputs.finite("picture_frame.report_angles_deg", a)
+
+    # -- geometry ---------------------------------------------------------------------
+    def frame(self, model: BeadModel) -> FrameGeometry:
+        """Frame and clamps on ``model``; refuses coupons that are not square."""
+        p = model.positions
+        lo, hi = p[:, :2].min(axis=0), p[:, :2].max(axis=0)
+        d = float(model.diameters.max())
+        sides = hi - lo + d
+        if abs(sides[0] - sides[1]) > 0.1 * sides.max():
+            raise InputError(f"picture_frame needs a square coupon, got {1e3 * sides[0]:.2f} x "
+                             f"{1e3 * sides[1]:.2f} mm; cut one with "
+                             f"Coupon(length_m=L, width_m=L)")
+        side = float(sides.mean())
+        frame = self.frame_length_m if self.frame_length_m is not None else 1.05 * side
+        if frame < side * (1 - 1e-9):
+            raise InputError(f"picture_frame.frame_length_m = {frame:g} m is shorter than the "
+                             f"fabric side {side:g} m; the arms must hold the whole fabric")
+        clamp = self.clamp_width_m if self.clamp_width_m is not None else 0.1 * side
+        if clamp >= 0.35 * side:
+            raise InputError(f"picture_frame.clamp_width_m = {clamp:g} m leaves too little free "
+                             f"fabric on a {side:g} m coupon; use at most {0.35 * side:g} m")
+        edges = []
+        for k in range(2):
+            x = p[:, k]
+            a, b = x.min() + clamp, x.max() - clamp
+            # each edge midway between beads, so LAMMPS and Python cannot disagree
+            a = 0.5 * (x[x <= a].max() + x[x > a].min())
+            b = 0.5 * (x[x < b].max() + x[x >= b].min())
+            edges += [float(a), float(b)]
+        centre = (lo + hi) / 2
+        pin = centre - frame / 2
+        return FrameGeometry(pin_a=(float(pin[0]), float(pin[1])), frame_length_m=float(frame),
+                             fabric_length_m=side, clamp_width_m=float(clamp),
+                             inner=tuple(edges), centre=(float(centre[0]), float(centre[1])),
+                             free_side_m=float(np.mean([edges[1] - edges[0],
+                                                        edges[3] - edges[2]])))
+
+    def clamped(self, model: BeadModel) -> np.ndarray:
+        """Mask of the clamped beads (outside the free square)."""
+        x_lo, x_hi, y_lo, y_hi = self.frame(model).inner
+        p = model.positions
+        free = (p[:, 0] >= x_lo) & (p[:, 0] <= x_hi) & (p[:, 1] >= y_lo) & (p[:, 1] <= y_hi)
+        return ~free
+
+    def max_displacement(self, model: BeadModel) -> float:
+        if self.max_displacement_m is not None:
+            return self.max_displacement_m
+        return float(displacement_for_shear_angle_m(self.max_shear_angle_deg,
+                                                    self.frame(model).frame_length_m))
+
+    def travel_m(self, model: BeadModel) -> float:
+        return self.max_displacement(model)
+
+    def check_orientation(self, model: BeadModel) -> None:
+        """Warp must run along x and weft along y (within 15°)."""
+        axes = family_axes_deg(model, model.positions)
+        for fam, want in (("warp", 0.0), ("weft", 90.0)):
+            got = axes.get(fam)
+            if got is not None and abs(((got - want) + 90) % 180 - 90) > 15:
+                raise InputError(f"picture_frame needs {fam} along {'x' if want == 0 else 'y'}, "
+                                 f"but its fibres run at {got:.0f} deg; cut the coupon at "
+                                 f"angle_deg = 0")
+
+    # -- preload ----------------------------------------------------------------------
+    def prepare(self, model: BeadModel) -> BeadModel:
+        """Validate; with a preload, give the unclamped fibres' bonds their own types."""
+        geometry = self.frame(model)
+        self.check_orientation(model)
+        dmax = self.max_displacement(model)
+        limit = float(displacement_for_shear_angle_m(80.0, geometry.frame_length_m))
+        if dmax > limit:
+            raise InputError(f"picture_frame.max_displacement_m = {dmax:g} m shears the frame "
+                             f"beyond 80 deg; use at most {limit:g} m")
+        if self.pretension_strain == 0:
+            return model
+        clamped = self.clamped(model)
+        preloaded = ~(clamped[model.bonds[:, 0]] & clamped[model.bonds[:, 1]])
+        table = list(model.bond_type_table)
+        types = model.bond_types.copy()
+        new_type = {}
+        for t in np.unique(model.bond_types[preloaded]):
+            bt = table[t - 1]
+            table.append(BondType(bt.coefficient, bt.rest_length_m, bt.family,
+                                  bt.axial_stiffness_n))
+            new_type[int(t)] = len(table)
+        types[preloaded] = [new_type[int(t)] for t in model.bond_types[preloaded]]
+        info = dict(model.info, picture_frame_preload={
+            "strain": self.pretension_strain, "bond_types": sorted(new_type.values())})
+        return BeadModel(**{**model.__dict__, "bond_type_table": table, "bond_types": types,
+                            "info": info})
+
+    def preload_types(self, model: BeadModel) -> list[int]:
+        return list(model.info.get("picture_frame_preload", {}).get("bond_types", []))
+
+    def pretension_block(self, model: BeadModel) -> str:
+        types = self.preload_types(model)
+        if not types or self.pretension_strain == 0:
+            return "# no clamping preload"
+        s = self.pretension_strain
+        variables, args, coeffs = [], [], []
+        for t in types:
+            bt = model.bond_type_table[t - 1]
+            variables.append(f"variable        r0_{t} equal \"{fmt(bt.rest_length_m)}*"
+                             f"(1-{fmt(s)}*ramp(0,1))\"")
+            args.append(f"bond harmonic r0 {t} v_r0_{t}")
+            coeffs.append(f"bond_coeff      {t} {fmt(bt.coefficient)} "
+                          f"{fmt(bt.rest_length_m * (1 - s))}   # {bt.family}, preloaded")
+        beads = model_bead_parameters(model)
+        longest = int(np.bincount(model.fibre_ids).max())
+        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
+        steps = max(1000, int(self.pretension_transits * transit / self.time_step_s(model)))
+        return render("pretension", strain=s, held="clamps", free="free",
+                      adapt_variables="\n".join(variables), adapt_args=" ".join(args),
+                      steps=steps, final_bond_coeffs="\n".join(coeffs))
+
+    # -- input ------------------------------------------------------------------------
+    def input_text(self, model: BeadModel) -> str:
+        g = self.frame(model)
+        dt = self.time_step_s(model)
+        load = self.loading(model)
+        beads = model_bead_parameters(model)
+        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ref_force = max(self.pretension_strain, 1e-3) * ea
+        power, power_ref = clamp_power("clamps")
+        outputs = self.outputs_block(model, power, power_ref, print_values="${d} ${shear_deg}",
+                                     print_names="displacement_m shear_angle_lammps_deg",
+                                     thermo_values="v_d v_shear_deg c_p_ext")
+        text = render("picture_frame", frame_length=g.frame_length_m, ax=g.pin_a[0],
+                      ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
+                      y_hi=g.inner[3], pretension=self.pretension_block(model),
+                      relax=self.relax_block(model, "clamps", "free", ref_force),
+                      displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
+                      displacement_next=load.lammps_displacement("t_next"),
+                      velocity_next=load.lammps_velocity("t_next"),
+                      gamma=self.gamma(model), outputs=outputs)
+        return "\n".join([
+            blocks.setup(model, PROTOCOL, DATA_FILE, dt),
+            blocks.bonds(model),
+            blocks.contact(model, self.contact, beads),
+            text,
+            ContactPower.commands(),
+            trajectory_commands(self.trajectory_every(model, self.trajectory_frames)),
+            blocks.guards(model, dt),
+            render("run", steps=self.steps(model)),
+            render("finish", final_data="final.data"),
+        ])
+
+    def reduce(self, run_dir: Path, model: BeadModel,
+               monitor: ContactPower | None = None) -> DrivenResult:
+        return reduce(run_dir, model, self, monitor)
+
+
+def interval_force(displacement: np.ndarray, work: np.ndarray) -> np.ndarray:
+    """Force from the power balance: work over displacement in each interval (0 at the first
+    sample; an interval without displacement keeps the previous value)."""
+    dd = np.diff(displacement)
+    dw = np.diff(work)
+    force = np.zeros_like(displacement)
+    for k in range(len(dd)):
+        force[k + 1] = dw[k] / dd[k] if abs(dd[k]) > 0 else force[k]
+    return force
+
+
+def fibre_shear_angles(run_dir: Path, model: BeadModel, centre, half_size,
+                       reference_deg: float = 45.0) -> tuple[np.ndarray, np.ndarray]:
+    """(steps, shear angle between warp and weft in the central zone [deg]) per trajectory
+    frame; ``reference_deg``: the direction the test stretches (see
+    :func:`fabmd.results.fibre_angles.shear_angle_deg`)."""
+    path = Path(run_dir) / TRAJECTORY
+    if not path.exists():
+        return np.zeros(0), np.zeros(0)
+    steps, angles = [], []
+    first_zone = None
+    for step, ids, pos in read_dump(path):
+        if len(ids) != model.n_beads:
+            continue
+        if first_zone is None:  # the zone follows the beads that were in it at the start
+            first_zone = zone_mask(pos, centre, half_size)
+        gamma = shear_angle_deg(model, pos, first_zone, reference_deg=reference_deg)
+        if gamma is not None:
+            steps.append(step)
+            angles.append(gamma)
+    return np.asarray(steps), np.asarray(angles)
+
+
+def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
+           monitor: ContactPower | None = None) -> DrivenResult:
+    """Curve (shear angle, frame force, F_s, F_norm), locking angle and the evidence."""
+    g = test.frame(model)
+    out = read_outputs(run_dir, test.every(model), test.time_step_s(model), monitor)
+    d = out["displacement_m"]
+    gamma = shear_angle_from_displacement_deg(d, g.frame_length_m)
+    force = interval_force(d, out.external_work_j)
+    fs = shear_force_n(force, d, g.frame_length_m)
+    fnorm = normalised_shear_force_n_m(fs, g.frame_length_m, g.fabric_length_m)
+    curve = {"time_s": out["time_s"], "displacement_m": d, "shear_angle_deg": gamma,
+             "frame_angle_deg": np.degrees(frame_angle_rad(d, g.frame_length_m)),
+             "frame_force_n": force, "shear_force_n": fs, "normalised_force_n_m": fnorm,
+             **energy_columns(out)}
+    dmax = test.max_displacement(model)
+    started = started_mask(out, test.loading(model), d / dmax)
+    valid = gamma > 0.02 * gamma.max()  # past the first, noisy intervals of the smooth start
+    lock = tangent_intersection(gamma[valid], fnorm[valid])
+    initial = tangent_intersection(np.radians(gamma[valid]), fnorm[valid])["initial_slope"]
+    steps, fibre_gamma = fibre_shear_angles(run_dir, model, g.centre,
+                                            (g.free_side_m / 4, g.free_side_m / 4))
+    kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)
+    summary = {
+        "protocol": PROTOCOL,
+        "n_beads": model.n_beads,
+        "n_clamped_beads": int(test.clamped(model).sum()),
+        "fabric_length_m": g.fabric_length_m,
+        "frame_length_m": g.frame_length_m,
+        "clamp_width_m": g.clamp_width_m,
+        "free_side_m": g.free_side_m,
+        "pretension_strain": test.pretension_strain,
+        "time_step_s": test.time_step_s(model),
+        "steps": test.steps(model),
+        "corner_speed_m_s": test.loading(model).speed_m_s,
+        "max_displacement_m": dmax,
+        "max_shear_angle_deg": float(gamma.max()),
+        "initial_shear_stiffness_n_m_per_rad": initial,
+        "locking_angle_deg": lock["x"] if lock["found"] else None,
+        "locking": lock,
+        "normalised_force_at_angle_n_m": {f"{k:g}": v for k, v in values_at(
+            gamma, fnorm, test.report_angles_deg).items()},
+        "frame_force_at_angle_n": {f"{k:g}": v for k, v in values_at(
+            gamma, force, test.report_angles_deg).items()},
+        "max_frame_force_n": float(force.max()),
+        "mean_frame_force_n": float(out.external_work_j[-1] / dmax),
+        "max_normalised_force_n_m": float(fnorm.max()),
+        "fibre_shear_angle": {
+            "zone": "central square, half the free side wide",
+            "steps": steps.tolist(), "kinematic_deg": kinematic.tolist(),
+            "fibres_deg": fibre_gamma.tolist(),
+            "max_difference_deg": float(np.abs(fibre_gamma - kinematic).max())
+            if len(steps) else None},
+        "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
+        "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
+        "quasi_static_note": "kinetic energy of the free fabric over the bond strain energy "
+                             "and over the work done so far, after the smooth start and the "
+                             "first tenth of the displacement",
+        "energy_balance": energy_balance(out),
+    }
+    series = [{"x": gamma, "y": fnorm, "label": "F_norm = F_s L_frame / L_fabric²"}]
+    if lock["found"]:
+        series.append({"x": [lock["x"], lock["x"]], "y": [0.0, float(fnorm.max())],
+                       "style": "--", "label": f"locking {lock['x']:.1f}°", "lw": 1.0})
+    ke = summary["max_kinetic_to_strain_energy"]
+    plot = {"path": "curve.png", "series": series, "xlabel": "shear angle γ [deg]",
+            "ylabel": "normalised shear force [N/m]", "title": "Picture-frame shear",
+            "notes": f"fabric {1e3 * g.fabric_length_m:.1f} mm, frame "
+                     f"{1e3 * g.frame_length_m:.1f} mm, preload {test.pretension_strain:g}"
+                     f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
+                     f"\n{model.n_beads} beads"}
+    return DrivenResult(Path(run_dir), curve, summary, [plot])

@@ -1,0 +1,94 @@
+"""Periodic cells loaded by box deformation: closed form on straight fibres, and a crimped
+plain-weave cell in tension and trellis shear (seconds)."""
+
+import numpy as np
+import pytest
+
+from fabmd.engine import Engine
+from fabmd.errors import InputError
+from fabmd.model.bead_model import BeadModel, BondType, Yarn
+from fabmd.model.beads import Discretisation, bead_parameters
+from fabmd.model.material import VirtualFibre
+from fabmd.protocols.crimp import Crimp
+from fabmd.protocols.periodic import PeriodicShear, PeriodicTension
+
+from .fabrics import SOFT_GLASS, parallel_fibres, plain_weave_cell
+
+DIAMETER = 0.5e-3
+
+
+def periodic_parallel_fibres(n=4, length_m=4e-3, gap=1.2) -> BeadModel:
+    """``n`` straight fibres along x, each closed across the x faces, ``gap``·d apart in a
+    cell periodic in x and y (no contact between them)."""
+    fibre = VirtualFibre.solid(SOFT_GLASS, DIAMETER)
+    nb = round(length_m / (0.5 * DIAMETER))
+    b = bead_parameters(fibre, Discretisation(), bond_length_m=length_m / nb)
+    x = np.arange(nb) * b.bond_length_m
+    pos = np.vstack([np.column_stack([x, np.full(nb, (j + 0.5) * gap * DIAMETER),
+                                      np.zeros(nb)]) for j in range(n)])
+    bonds = [(j * nb + i, j * nb + (i + 1) % nb) for j in range(n) for i in range(nb)]
+    return BeadModel(
+        positions=pos, diameters=DIAMETER, masses=b.mass_kg, atom_types=1,
+        fibre_ids=np.repeat(np.arange(1, n + 1), nb), bonds=bonds, bond_types=1,
+        family_names=("warp",),
+        bond_type_table=[BondType(b.bond_coefficient, b.bond_length_m, "warp",
+                                  b.axial_stiffness_n)],
+        fibre_yarn=np.arange(1, n + 1), yarns=[Yarn(f"warp-{j}", "warp") for j in range(n)],
+        box_lo=[0, 0, -2 * DIAMETER], box_hi=[length_m, n * gap * DIAMETER, 2 * DIAMETER],
+        periodic=(True, True, False))
+
+
+@pytest.mark.lammps
+def test_straight_fibres_give_n_ea_over_width(tmp_path):
+    n, gap = 4, 1.2
+    cell = periodic_parallel_fibres(n=n, gap=gap)
+    s = PeriodicTension(max_strain_pct=1.0).run(cell, tmp_path / "pt",
+                                                engine=Engine(progress=False)).summary
+    ea = SOFT_GLASS.modulus_pa * np.pi * DIAMETER**2 / 4
+    width = n * gap * DIAMETER
+    assert s["width_m"] == pytest.approx(width)
+    assert s["initial_stiffness_n_m_per_width"] == pytest.approx(n * ea / width, rel=0.02)
+    assert s["force_per_width_at_strain_n_m"]["0.5"] == pytest.approx(
+        n * ea * 0.005 / width, rel=0.02)
+    assert s["energy_balance"]["relative_error"] < 0.05
+    assert s["max_kinetic_to_strain_energy"] < 0.05
+
+
+def test_only_periodic_cells_are_accepted():
+    with pytest.raises(InputError, match="periodic in x and y"):
+        PeriodicTension().prepare(parallel_fibres())
+    with pytest.raises(InputError, match="transverse"):
+        PeriodicTension(transverse="loose")
+    with pytest.raises(InputError, match="max_shear_angle_deg"):
+        PeriodicShear(max_shear_angle_deg=80)
+
+
+@pytest.fixture(scope="module")
+def woven_cell(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cell") / "crimp"
+    return Crimp(expansion={"warp": -0.02, "weft": -0.02}).run(
+        plain_weave_cell(spacing_m=1e-3, gap=1.0), out, engine=Engine(progress=False)).model
+
+
+@pytest.mark.lammps
+def test_woven_cell_in_tension(woven_cell, tmp_path):
+    result = PeriodicTension(max_strain_pct=2.0).run(woven_cell, tmp_path / "pt",
+                                                     engine=Engine(progress=False))
+    s = result.summary
+    assert s["initial_stiffness_n_m_per_width"] > 0
+    assert result.curve["force_per_width_n_m"][-1] > result.curve["force_per_width_n_m"][1]
+    assert s["energy_balance"]["relative_error"] < 0.05
+    assert s["max_kinetic_to_strain_energy"] < 0.05
+    assert (result.run_dir / "curve.png").exists()
+
+
+@pytest.mark.lammps
+def test_woven_cell_in_trellis_shear(woven_cell, tmp_path):
+    result = PeriodicShear(max_shear_angle_deg=45).run(woven_cell, tmp_path / "ps",
+                                                       engine=Engine(progress=False))
+    s, c = result.summary, result.curve
+    assert c["shear_angle_deg"][-1] == pytest.approx(45, abs=0.5)
+    assert s["initial_shear_stiffness_n_m_per_rad"] > 0
+    assert s["locking"]["found"] and s["locking_angle_deg"] < 45
+    assert s["energy_balance"]["relative_error"] < 0.05
+    assert s["max_kinetic_to_strain_energy"] < 0.05

@@ -1,0 +1,172 @@
+"""Picture-frame shear: frame kinematics and normalisation in closed form, then a small
+crimped plain weave clamped as woven (seconds per run)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from fabmd.engine import Engine
+from fabmd.errors import InputError
+from fabmd.model.contact import ContactModel
+from fabmd.protocols.coupon import Coupon
+from fabmd.protocols.crimp import Crimp
+from fabmd.protocols.picture_frame import (
+    PictureFrame,
+    displacement_for_shear_angle_m,
+    frame_angle_rad,
+    normalised_shear_force_n_m,
+    shear_angle_from_displacement_deg,
+    shear_force_n,
+)
+from fabmd.results.curves import tangent_intersection
+
+from .fabrics import parallel_fibres, plain_weave_cell
+
+SIDE = 6e-3
+
+
+# -- closed form (no LAMMPS) ---------------------------------------------------------------
+def frame_corner(gamma_deg, length):
+    """Pulled corner C of a rhombus frame of side L with pin A at the origin, built from
+    the arm directions: the arms make 90° − γ, symmetric about the diagonal."""
+    half = math.radians(45 - gamma_deg / 2)  # θ: arm to diagonal
+    u = np.array([1.0, 1.0]) / math.sqrt(2)
+    rot = lambda a: np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])  # noqa: E731
+    e1, e2 = rot(-half) @ u, rot(half) @ u
+    return length * (e1 + e2), e1, e2
+
+
+@pytest.mark.parametrize("gamma", [0.0, 5.0, 20.0, 45.0, 70.0])
+def test_frame_kinematics_match_the_closed_form(gamma):
+    length = 0.15
+    corner, e1, e2 = frame_corner(gamma, length)
+    d = np.linalg.norm(corner) - math.sqrt(2) * length  # displacement along the diagonal
+    assert shear_angle_from_displacement_deg(d, length) == pytest.approx(gamma, abs=1e-9)
+    assert displacement_for_shear_angle_m(gamma, length) == pytest.approx(d, abs=1e-12)
+    # cos θ = (√2 L + d) / (2 L), and the arms make 90° − γ = 2θ
+    theta = float(frame_angle_rad(d, length))
+    assert math.cos(theta) == pytest.approx((math.sqrt(2) * length + d) / (2 * length))
+    assert math.degrees(math.acos(e1 @ e2)) == pytest.approx(90 - gamma, abs=1e-9)
+
+
+def test_normalised_force_formula():
+    length, fabric, d = 0.2, 0.14, 0.05
+    theta = frame_angle_rad(d, length)
+    fs = shear_force_n(100.0, d, length)
+    assert fs == pytest.approx(100.0 / (2 * math.cos(theta)))
+    assert normalised_shear_force_n_m(fs, length, fabric) == pytest.approx(fs * length / fabric**2)
+    # at γ = 0 the arms meet at 90°: F_s = F / √2
+    assert shear_force_n(1.0, 0.0, length) == pytest.approx(1 / math.sqrt(2))
+    # frames of different size compare: the same fabric response (energy per area per
+    # radian) gives the same F_norm; power F·ḋ = F_norm·L_fabric²·cos γ·γ̇
+    for size in (0.1, 0.3):
+        gamma = np.radians(30.0)
+        dgamma = 1e-7
+        d1 = displacement_for_shear_angle_m(np.degrees(gamma), size)
+        d2 = displacement_for_shear_angle_m(np.degrees(gamma + dgamma), size)
+        fnorm, area = 50.0, (0.9 * size) ** 2
+        force = fnorm * area * math.cos(gamma) * dgamma / (d2 - d1)
+        back = normalised_shear_force_n_m(shear_force_n(force, d1, size), size, 0.9 * size)
+        assert back == pytest.approx(fnorm, rel=1e-5)
+
+
+def test_tangent_intersection_finds_the_knee():
+    x = np.linspace(0, 60, 121)
+    y = np.where(x < 40, 0.5 * x, 20 + 30 * (x - 40))
+    lock = tangent_intersection(x, y)
+    assert lock["found"] and lock["x"] == pytest.approx(40.0, abs=0.5)
+    flat = tangent_intersection(x, 2 * x)
+    assert not flat["found"]
+
+
+def test_bad_frames_are_refused():
+    with pytest.raises(InputError, match="max_shear_angle_deg"):
+        PictureFrame(max_shear_angle_deg=85)
+    with pytest.raises(InputError, match="pretension_strain"):
+        PictureFrame(pretension_strain=0.2)
+    with pytest.raises(InputError, match="square coupon"):
+        PictureFrame().prepare(parallel_fibres())
+    square = plain_weave_cell(spacing_m=1e-3, cells=(2, 2), periodic=False)
+    with pytest.raises(InputError, match="shorter than the fabric"):
+        PictureFrame(frame_length_m=1e-3).prepare(square)
+    # a coupon turned by 45 deg is a bias-extension coupon, not a picture-frame one
+    turned = plain_weave_cell(spacing_m=1e-3, cells=(2, 2), periodic=False)
+    c, s = math.cos(math.pi / 4), math.sin(math.pi / 4)
+    turned.positions[:, :2] = turned.positions[:, :2] @ np.array([[c, s], [-s, c]])
+    with pytest.raises(InputError, match="warp along x"):
+        PictureFrame().prepare(turned)
+
+
+# -- LAMMPS runs ---------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def as_woven(tmp_path_factory):
+    """A 6 mm square cut from a crimped plain weave, clamped as woven (not relaxed free:
+    the frame's clamps hold the fibres' crimp tension)."""
+    root = tmp_path_factory.mktemp("pf")
+    engine = Engine(progress=False)
+    crimped = Crimp(expansion={"warp": -0.02, "weft": -0.02}).run(
+        plain_weave_cell(spacing_m=1e-3, gap=1.0), root / "crimp", engine=engine)
+    return Coupon(length_m=SIDE, width_m=SIDE, relax=None).run(crimped.model, root / "coupon",
+                                                                engine=engine).model
+
+
+@pytest.fixture(scope="module")
+def frictional(as_woven, tmp_path_factory):
+    out = tmp_path_factory.mktemp("pf_mu") / "run"
+    return PictureFrame(max_shear_angle_deg=60).run(as_woven, out, engine=Engine(progress=False))
+
+
+
+@pytest.mark.lammps
+def test_force_stays_low_then_locks(frictional):
+    s = frictional.summary
+    assert s["locking"]["found"], s["locking"]
+    assert 20 < s["locking_angle_deg"] < 60
+    f = s["normalised_force_at_angle_n_m"]
+    assert f["10"] < 0.05 * s["max_normalised_force_n_m"]  # low first ...
+    assert s["locking"]["final_slope"] > 20 * s["locking"]["initial_slope"]  # ... then sharp
+    # the fibres in the centre follow the frame
+    fibre = s["fibre_shear_angle"]
+    assert len(fibre["steps"]) >= 10
+    at = np.asarray(fibre["kinematic_deg"]) < 40
+    assert np.max(np.abs(np.subtract(fibre["fibres_deg"], fibre["kinematic_deg"]))[at]) < 5
+
+
+@pytest.mark.lammps
+def test_picture_frame_is_quasi_static_and_balances_energy(frictional):
+    s = frictional.summary
+    assert s["max_kinetic_to_strain_energy"] < 0.05
+    assert s["energy_balance"]["relative_error"] < 0.05
+    files = {p.name for p in frictional.run_dir.iterdir()}
+    assert {"curve.csv", "curve.png", "summary.json", "trajectory.lammpstrj",
+            "in.picture_frame"} <= files
+    c = frictional.curve
+    assert c["shear_angle_deg"][-1] == pytest.approx(60, abs=0.5)
+
+
+@pytest.mark.lammps
+def test_without_friction_the_force_is_much_lower(as_woven, frictional, tmp_path):
+    smooth = PictureFrame(max_shear_angle_deg=60, contact=ContactModel(friction=0.0)).run(
+        as_woven, tmp_path / "mu0", engine=Engine(progress=False))
+    with_mu, without = frictional.summary, smooth.summary
+    assert without["mean_frame_force_n"] < 0.5 * with_mu["mean_frame_force_n"]
+    assert without["max_frame_force_n"] < 0.5 * with_mu["max_frame_force_n"]
+    assert without["energy_balance"]["relative_error"] < 0.05
+
+
+def test_preload_shrinks_only_the_unclamped_fibres():
+    square = plain_weave_cell(spacing_m=1e-3, cells=(3, 3), periodic=False)
+    frame = PictureFrame(pretension_strain=0.01)
+    prepared = frame.prepare(square)
+    clamped = frame.clamped(square)
+    both = clamped[square.bonds[:, 0]] & clamped[square.bonds[:, 1]]
+    new_types = frame.preload_types(prepared)
+    assert len(new_types) == 2 and len(prepared.bond_type_table) == 4
+    assert np.all(np.isin(prepared.bond_types[~both], new_types))
+    assert not np.any(np.isin(prepared.bond_types[both], new_types))
+    text = frame.input_text(prepared)
+    assert "fix             pretension all adapt" in text
+    r0 = prepared.bond_type_table[new_types[0] - 1].rest_length_m
+    assert f"{r0 * 0.99:.10g}" in text  # the shorter rest length is kept for the test
+    assert "no clamping preload" in PictureFrame().input_text(square)
