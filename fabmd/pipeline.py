@@ -43,6 +43,13 @@ class TestKind:
 TESTS: dict[str, TestKind] = {
     "tension": TestKind("fabmd.protocols.tension", "Tension",
                         {"length_m": 0.120, "width_m": 0.050}),
+    # clamped as cut: a relaxed square of slack yarns crumples in the frame
+    "picture-frame": TestKind("fabmd.protocols.picture_frame", "PictureFrame",
+                              {"length_m": 0.100, "width_m": 0.100, "relax": None}),
+    "bias-extension": TestKind("fabmd.protocols.bias_extension", "BiasExtension",
+                               {"length_m": 0.150, "width_m": 0.050, "angle_deg": 45.0}),
+    "periodic-tension": TestKind("fabmd.protocols.periodic", "PeriodicTension", None),
+    "periodic-shear": TestKind("fabmd.protocols.periodic", "PeriodicShear", None),
 }
 
 
@@ -99,14 +106,19 @@ def coupon_stage(scene: Scene, test: str) -> tuple[Coupon, str]:
     return build(Coupon, defaults, f"{section(test)}.coupon", contact=scene.contact), source
 
 
-def protocol_stage(scene: Scene, test: str):
-    """The protocol object of a test from its scene-file table."""
+def build_protocol(test: str, settings: dict | None = None, **defaults):
+    """The protocol object of test ``test`` from a settings table (validated)."""
     if test not in TESTS:
-        raise InputError(f"unknown test {test!r} (known: {', '.join(sorted(TESTS))})")
+        raise InputError(f"test must be one of {', '.join(sorted(TESTS))}, got {test!r}")
     kind = TESTS[test]
     cls = getattr(importlib.import_module(kind.module), kind.cls)
+    return build(cls, settings, section(test), **defaults)
+
+
+def protocol_stage(scene: Scene, test: str):
+    """The protocol object of a test from its scene-file table."""
     table = {k: v for k, v in scene.protocols.get(section(test), {}).items() if k != "coupon"}
-    return build(cls, table, section(test), contact=scene.contact)
+    return build_protocol(test, table, contact=scene.contact)
 
 
 def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
@@ -122,6 +134,9 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
     protocol = protocol_stage(scene, test)  # validate everything before LAMMPS starts
     coupon, source = coupon_stage(scene, test) if TESTS[test].coupon is not None else \
         (None, "cell")
+    if coupon is None and scene.protocols.get(section(test), {}).get("coupon"):
+        raise InputError(f"[{section(test)}] takes the crimped periodic cell itself: "
+                         f"remove its coupon table")
     crimp = crimp_stage(scene)
     out = Path(out)
     if resume:
