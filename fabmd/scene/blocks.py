@@ -5,6 +5,7 @@ from __future__ import annotations
 from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
 from ..model.contact import ContactModel
+from . import outputs
 from .templates import fmt, render
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
@@ -78,3 +79,15 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
     c = contact_model.pair_coefficients(beads)
     return render("contact_granular", normal=contact_model.normal,
                   style=contact_model.pair_style(), **c)
+
+
+def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True) -> str:
+    """Outputs block: a trajectory frame every ``every`` steps (see
+    :mod:`fabmd.scene.outputs`; put :func:`trajectory_final` after the last run and call
+    :func:`fabmd.results.trajectory.finalise` on the run folder afterwards)."""
+    return outputs.trajectory(every, velocities=velocities, bond_forces=bond_forces)
+
+
+def trajectory_final(bond_forces: bool = True) -> str:
+    """After the last run: the final step as the trajectory's last frame."""
+    return outputs.trajectory_final(bond_forces)
