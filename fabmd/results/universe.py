@@ -14,10 +14,13 @@ Beads are atoms, virtual fibres are residues, yarns are segments:
 
 Positions stay in SI metres and time in seconds (``convert_units=False``;
 MDAnalysis's own unit is the ångström). Positions are unwrapped, so fibres are
-continuous across periodic faces. Per-bond forces [N] (> 0 in tension) and
-lengths [m] of the current frame are in ``u.trajectory.ts.data["bond_force"]``
-and ``["bond_length"]``, in the order of ``u.bonds``. ``u.fabmd`` holds the
-family names, the periodicity and the source path.
+continuous across periodic faces (``u.bonds.values(pbc=True)`` gives true bond
+lengths even for the bond that closes a periodic fibre). Per-bond forces [N]
+(> 0 in tension) and lengths [m] of the current frame are in
+``u.trajectory.ts.data["bond_force"]`` and ``["bond_length"]`` in the file's bond
+order (``/connectivity/bonds``, the bead model's); :func:`bond_forces` gives
+them in the order of ``u.bonds`` (which MDAnalysis sorts). ``u.fabmd`` holds the
+family names, the periodicity, the source path and that bond order.
 """
 
 from __future__ import annotations
@@ -105,16 +108,31 @@ def universe_from_trajectory(path: Path):
         names = [str(v) for v in meta["families"]]
         yarns = meta["yarns"]
         n_frames = part["position/value"].shape[0]
+        bonds = f["connectivity/bonds"][()]
         u = _build(part["species"].shape[0], part["fibre_id"][()], params["fibre_yarn"][()],
                    names, part["species"][()], [y["name"] for y in yarns],
                    [y["family"] for y in yarns], part["mass"][()], part["diameter"][()],
-                   f["connectivity/bonds"][()], params["bond_type"][()])
+                   bonds, params["bond_type"][()])
     if n_frames == 0:
         raise InputError(f"{path} holds no frames")
     u.load_new(str(path), format=reader_class())
     u.fabmd = {"path": str(path), "family_names": names,
-               "periodic": list(meta.get("periodic", [False] * 3)), "source": "trajectory"}
+               "periodic": list(meta.get("periodic", [False] * 3)), "source": "trajectory",
+               "bond_order": bond_order(u, bonds)}
     return u
+
+
+def bond_order(u, model_bonds: np.ndarray) -> np.ndarray:
+    """For each bond of ``u.bonds``, its index in ``model_bonds`` (the file's order)."""
+    model_bonds = np.asarray(model_bonds, np.int64).reshape(-1, 2)
+    if not len(model_bonds):
+        return np.zeros(0, np.int64)
+    n = u.atoms.n_atoms
+    keys = np.minimum(model_bonds[:, 0], model_bonds[:, 1]) * n + model_bonds.max(axis=1)
+    ub = u.bonds.indices.astype(np.int64)
+    wanted = np.minimum(ub[:, 0], ub[:, 1]) * n + ub.max(axis=1)
+    order = np.argsort(keys, kind="stable")
+    return order[np.searchsorted(keys[order], wanted)]
 
 
 def universe_from_model(model: BeadModel, source: str = "model"):
@@ -128,7 +146,8 @@ def universe_from_model(model: BeadModel, source: str = "model"):
     u.load_new(model.unwrapped_positions[None].astype(np.float32), format=MemoryReader,
                dimensions=np.array([*lengths, 90.0, 90.0, 90.0]))
     u.fabmd = {"path": source, "family_names": list(model.family_names),
-               "periodic": list(model.periodic), "source": "model"}
+               "periodic": list(model.periodic), "source": "model",
+               "bond_order": bond_order(u, model.bonds)}
     return u
 
 
@@ -190,6 +209,20 @@ def select_yarn(u, name: str):
 
 
 def bond_forces(u) -> np.ndarray | None:
-    """Axial force [N] (> 0 in tension) of every bond in the current frame, if stored."""
-    value = u.trajectory.ts.data.get("bond_force")
-    return None if value is None else np.asarray(value, float)
+    """Axial force [N] (> 0 in tension) of every bond of ``u.bonds`` (same order) in the
+    current frame; None when the trajectory holds no bond forces."""
+    return _bond_values(u, "bond_force")
+
+
+def bond_lengths(u) -> np.ndarray | None:
+    """Length [m] of every bond of ``u.bonds`` (same order) as LAMMPS measured it."""
+    return _bond_values(u, "bond_length")
+
+
+def _bond_values(u, name: str) -> np.ndarray | None:
+    value = u.trajectory.ts.data.get(name)
+    if value is None:
+        return None
+    order = getattr(u, "fabmd", {}).get("bond_order")
+    value = np.asarray(value, float)
+    return value if order is None else value[order]
