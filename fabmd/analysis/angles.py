@@ -145,7 +145,8 @@ def shear_angle_field(frame: FabricFrame, warp: str = "warp", weft: str = "weft"
     """Shear angle γ = 90° − (θ_weft − θ_warp) per grid cell, in degrees.
 
     ``extra`` holds the warp and weft angle fields (``warp_angle_deg``,
-    ``weft_angle_deg``). Cells without both families are NaN.
+    ``weft_angle_deg``). Cells without both families are NaN: make cells at least
+    one yarn spacing wide.
     """
     pw, vw = segment_directions(frame, warp)
     pf, vf = segment_directions(frame, weft)

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +17,9 @@ from ..engine import mpi
 def _pyplot():
     import matplotlib
 
-    matplotlib.use("Agg")
+    # files are drawn without a display; a notebook keeps its inline backend
+    if "inline" not in os.environ.get("MPLBACKEND", ""):
+        matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     return plt
