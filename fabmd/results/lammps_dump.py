@@ -11,6 +11,7 @@ Both are read frame by frame, so a long trajectory never sits in memory whole.
 
 from __future__ import annotations
 
+import itertools
 import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -144,8 +145,8 @@ def iter_text_dump(path: Path) -> Iterator[DumpFrame]:
                 line = f.readline()
             if step is None or count is None or not columns:
                 return
-            lines = [f.readline() for _ in range(count)]
-            if count and not lines[-1].endswith("\n"):
+            lines = list(itertools.islice(f, count))
+            if len(lines) < count or count and not lines[-1].endswith("\n"):
                 return  # the last frame was cut short
             values = np.array("".join(lines).split(), dtype=float)
             if values.size != count * len(columns):

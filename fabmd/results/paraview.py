@@ -6,10 +6,11 @@ face; the one bond that closes it across the box is left out of the drawing).
 
 Point data: ``yarn_id``, ``fibre_id``, ``family`` (code = LAMMPS atom type, see
 the comment in the ``.pvd`` for names), ``diameter_m`` and, when stored,
-``velocity_m_s``. Cell (bond) data: ``yarn_id``, ``fibre_id``, ``family``,
-``bond_type`` and, when stored, ``bond_force_n`` (> 0 in tension) and
-``bond_length_m``. Open ``trajectory.pvd`` in ParaView (File → Open) and press
-Play; colour by ``bond_force_n`` or ``yarn_id``.
+``velocity_m_s``. Cell (bond) data, when stored: ``bond_force_n`` (> 0 in
+tension). Open ``trajectory.pvd`` in ParaView (File → Open) and press Play;
+colour by ``bond_force_n`` or ``yarn_id``; a Point Gaussian representation
+scaled by ``diameter_m`` shows the beads. Files are written for viewing:
+coordinates and values in single precision (``trajectory.h5`` keeps double).
 """
 
 from __future__ import annotations
@@ -51,19 +52,11 @@ class ParaViewSeries:
         self.model = model
         self.entries: list[tuple[float, str]] = []
         self.bytes = 0
-        bonds = model.bonds
-        fibre = model.fibre_ids[bonds[:, 0]] if len(bonds) else np.zeros(0, np.int64)
-        self._bond_static = {
-            "yarn_id": model.fibre_yarn[fibre - 1].astype(np.int32) if len(bonds) else fibre,
-            "fibre_id": fibre.astype(np.int32),
-            "family": model.atom_types[bonds[:, 0]].astype(np.int32) if len(bonds) else fibre,
-            "bond_type": model.bond_types.astype(np.int32),
-        }
         self._point_static = {
             "yarn_id": model.yarn_ids.astype(np.int32),
             "fibre_id": model.fibre_ids.astype(np.int32),
-            "family": model.atom_types.astype(np.int32),
-            "diameter_m": model.diameters,
+            "family": model.atom_types.astype(np.int8),
+            "diameter_m": model.diameters.astype(np.float32),
         }
 
     def append(self, frame) -> Path:
@@ -71,16 +64,14 @@ class ParaViewSeries:
         import meshio
 
         keep = drawn_bonds(self.model, frame.positions, frame.box_lo, frame.box_hi)
-        cell_data = {k: [v[keep]] for k, v in self._bond_static.items()}
-        for name, values in (("bond_force_n", frame.bond_force),
-                             ("bond_length_m", frame.bond_length)):
-            if values is not None:
-                cell_data[name] = [np.asarray(values, float)[keep]]
+        cell_data = {}
+        if frame.bond_force is not None:
+            cell_data["bond_force_n"] = [np.asarray(frame.bond_force, np.float32)[keep]]
         point_data = dict(self._point_static)
         if frame.velocities is not None:
-            point_data["velocity_m_s"] = np.asarray(frame.velocities, float)
-        mesh = meshio.Mesh(np.asarray(frame.positions, float),
-                           [("line", self.model.bonds[keep].astype(np.int64))],
+            point_data["velocity_m_s"] = np.asarray(frame.velocities, np.float32)
+        mesh = meshio.Mesh(np.asarray(frame.positions, np.float32),
+                           [("line", self.model.bonds[keep].astype(np.int32))],
                            point_data=point_data, cell_data=cell_data)
         name = f"{self.subfolder}/frame_{len(self.entries):05d}.vtu"
         path = self.folder / name
@@ -124,7 +115,6 @@ def export_paraview(trajectory: Path, folder: Path | None = None) -> Path:
                 box_lo=lo, box_hi=lo + part["box/edges/value"][i],
                 positions=part["position/value"][i],
                 velocities=part["velocity/value"][i] if "velocity" in part else None,
-                bond_force=obs["bond_force/value"][i] if "bond_force" in obs else None,
-                bond_length=obs["bond_length/value"][i] if "bond_length" in obs else None))
+                bond_force=obs["bond_force/value"][i] if "bond_force" in obs else None))
     series.close()
     return series.pvd

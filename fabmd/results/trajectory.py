@@ -25,7 +25,6 @@ Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)
     /observables/
         box_offset/        step, time, value [nf, 3] m (lower box corner)
         bond_force/        (optional) value [nf, nb] N, axial force, > 0 in tension
-        bond_length/       (optional) value [nf, nb] m
     /parameters/fabmd      attrs family_names, yarn_names, yarn_families, model_json;
                            datasets fibre_yarn [n_fibres], bond_type [nb]
 
@@ -55,8 +54,9 @@ H5MD_VERSION = (1, 1)
 
 TRAJECTORY_FILE = "trajectory.h5"
 
-#: gzip (readable by every HDF5 build, ParaView and h5py alike) after byte shuffling
-COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+#: gzip (readable by every HDF5 build, ParaView and h5py alike) after byte shuffling;
+#: level 1: higher levels cost more time and gain little on floating-point data
+COMPRESSION = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 
 
 class TrajectoryFormatError(FabmdError):
@@ -74,7 +74,7 @@ class TrajectoryWriter:
         path: the ``.h5`` file to write.
         model: the bead model (topology, yarns, families, masses, diameters).
         velocities: frames carry velocities.
-        bond_data: frames carry bond forces and lengths.
+        bond_data: frames carry bond forces.
     """
 
     def __init__(self, path: Path, model: BeadModel, *, velocities: bool = False,
@@ -131,7 +131,6 @@ class TrajectoryWriter:
         if self.bond_data:
             self.bond_force = self._element(obs, "bond_force", (nb,), "N")
             self.bond_force.attrs["sign"] = "positive in tension"
-            self.bond_length = self._element(obs, "bond_length", (nb,), "m")
         params = f.create_group("parameters/fabmd")
         params.attrs["family_names"] = np.array(model.family_names, dtype=h5py.string_dtype())
         params.attrs["yarn_names"] = np.array([y.name for y in model.yarns],
@@ -159,7 +158,7 @@ class TrajectoryWriter:
         return value
 
     def append(self, step: int, time: float, box_lo, box_hi, positions, velocities=None,
-               bond_force=None, bond_length=None) -> None:
+               bond_force=None) -> None:
         """Add one frame (positions unwrapped, SI)."""
         i = self.n_frames
         self.n_frames += 1
@@ -178,9 +177,8 @@ class TrajectoryWriter:
             ds.resize(i + 1, axis=0)
             ds[i] = value
         if self.bond_data:
-            for ds, value in ((self.bond_force, bond_force), (self.bond_length, bond_length)):
-                ds.resize(i + 1, axis=0)
-                ds[i] = np.nan if value is None else value
+            self.bond_force.resize(i + 1, axis=0)
+            self.bond_force[i] = np.nan if bond_force is None else bond_force
 
     def close(self) -> Path:
         """Close and move the file into place; returns its path."""
@@ -218,7 +216,6 @@ class Frame:
     positions: np.ndarray
     velocities: np.ndarray | None = None
     bond_force: np.ndarray | None = None
-    bond_length: np.ndarray | None = None
 
 
 def _bond_index(model: BeadModel) -> tuple[np.ndarray, np.ndarray]:
@@ -259,12 +256,11 @@ def frames_from_dumps(model: BeadModel, dump: Path, bond_dump: Path | None = Non
                 if pending is None:
                     break
             if pending is not None and pending.step == fr.step:
-                frame.bond_force, frame.bond_length = _bonds_in_model_order(
-                    model, keys, order, pending)
+                frame.bond_force = _bonds_in_model_order(model, keys, order, pending)
         yield frame
 
 
-def _bonds_in_model_order(model, keys, order, fr) -> tuple[np.ndarray, np.ndarray]:
+def _bonds_in_model_order(model, keys, order, fr) -> np.ndarray:
     a = fr.column("batom1").astype(np.int64) - 1
     b = fr.column("batom2").astype(np.int64) - 1
     k = np.minimum(a, b) * model.n_beads + np.maximum(a, b)
@@ -272,13 +268,9 @@ def _bonds_in_model_order(model, keys, order, fr) -> tuple[np.ndarray, np.ndarra
     where = np.clip(where, 0, len(keys) - 1)
     found = keys[where] == k
     force = np.full(model.n_bonds, np.nan)
-    length = np.full(model.n_bonds, np.nan)
-    index = order[where[found]]
     # compute bond/local reports -dE/dr: negative when the bond pulls, so tension = -force
-    force[index] = -fr.column("force")[found]
-    if "length" in fr.columns:
-        length[index] = fr.column("length")[found]
-    return force, length
+    force[order[where[found]]] = -fr.column("force")[found]
+    return force
 
 
 def write_trajectory(path: Path, model: BeadModel, frames, *, velocities: bool = False,
@@ -296,7 +288,7 @@ def write_trajectory(path: Path, model: BeadModel, frames, *, velocities: bool =
     with TrajectoryWriter(path, model, velocities=velocities, bond_data=bond_data) as w:
         for fr in frames:
             w.append(fr.step, fr.time, fr.box_lo, fr.box_hi, fr.positions, fr.velocities,
-                     fr.bond_force, fr.bond_length)
+                     fr.bond_force)
             if pv is not None:
                 pv.append(fr)
         n_frames = w.n_frames

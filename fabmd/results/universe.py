@@ -16,9 +16,8 @@ Positions stay in SI metres and time in seconds (``convert_units=False``;
 MDAnalysis's own unit is the ångström). Positions are unwrapped, so fibres are
 continuous across periodic faces (``u.bonds.values(pbc=True)`` gives true bond
 lengths even for the bond that closes a periodic fibre). Per-bond forces [N]
-(> 0 in tension) and lengths [m] of the current frame are in
-``u.trajectory.ts.data["bond_force"]`` and ``["bond_length"]`` in the file's bond
-order (``/connectivity/bonds``, the bead model's); :func:`bond_forces` gives
+(> 0 in tension) of the current frame are in ``u.trajectory.ts.data["bond_force"]``
+in the file's bond order (``/connectivity/bonds``, the bead model's); :func:`bond_forces` gives
 them in the order of ``u.bonds`` (which MDAnalysis sorts). ``u.fabmd`` holds the
 family names, the periodicity, the source path and that bond order.
 """
@@ -211,16 +210,7 @@ def select_yarn(u, name: str):
 def bond_forces(u) -> np.ndarray | None:
     """Axial force [N] (> 0 in tension) of every bond of ``u.bonds`` (same order) in the
     current frame; None when the trajectory holds no bond forces."""
-    return _bond_values(u, "bond_force")
-
-
-def bond_lengths(u) -> np.ndarray | None:
-    """Length [m] of every bond of ``u.bonds`` (same order) as LAMMPS measured it."""
-    return _bond_values(u, "bond_length")
-
-
-def _bond_values(u, name: str) -> np.ndarray | None:
-    value = u.trajectory.ts.data.get(name)
+    value = u.trajectory.ts.data.get("bond_force")
     if value is None:
         return None
     order = getattr(u, "fabmd", {}).get("bond_order")

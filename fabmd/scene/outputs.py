@@ -15,7 +15,7 @@ from .templates import render
 
 #: binary LAMMPS dump of the beads (id mol type x y z ix iy iz [vx vy vz]), sorted by id
 DUMP_FILE = "trajectory.bin"
-#: text LAMMPS ``dump local`` of the bonds (batom1 batom2 length force)
+#: text LAMMPS ``dump local`` of the bonds (batom1 batom2 force)
 BOND_DUMP_FILE = "bonds.dump"
 
 
@@ -26,7 +26,7 @@ def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True
     Args:
         every: steps between frames (>= 1).
         velocities: also write bead velocities.
-        bond_forces: also write the axial force and length of every bond.
+        bond_forces: also write the axial force of every bond.
     """
     every = inputs.positive_int("trajectory.every", every)
     bond_dump = (render("trajectory_bonds", every=every, bond_file=bond_file) if bond_forces
@@ -51,7 +51,7 @@ class TrajectoryOutput:
             The first and the last step are always frames.
         every_steps: steps between frames; overrides ``frames`` when given (>= 1).
         velocities: store bead velocities [m/s].
-        bond_forces: store the axial force [N] and length [m] of every bond.
+        bond_forces: store the axial force [N] of every bond.
         paraview: write ParaView files (``trajectory.pvd`` + ``paraview/*.vtu``)
             beside ``trajectory.h5``.
     """

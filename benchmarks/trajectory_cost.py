@@ -1,0 +1,189 @@
+"""What writing a trajectory costs: run time with and without it, and the file sizes.
+
+Two ways to use it::
+
+    # a synthetic plain-weave sheet with contact (default ~30 000 beads)
+    python benchmarks/trajectory_cost.py --yarns 8 --steps 10000 --frames 50
+
+    # a finished run folder (e.g. the plain-weave crimp): its input is run twice,
+    # as it is and with the trajectory block taken out (or put in, if it has none)
+    python benchmarks/trajectory_cost.py --run-dir runs/crimp --frames 100
+
+Cost = (run with trajectory + conversion to trajectory.h5 and ParaView files
+− run without) / run without. The target is < 10 %. Each variant runs
+``--repeat`` times and the fastest counts (the machine may be shared).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from fabmd.engine import Engine
+from fabmd.engine.script import logical_lines, total_run_steps
+from fabmd.model.bead_model import BeadModel
+from fabmd.results.trajectory import finalise
+from fabmd.scene.outputs import TrajectoryOutput
+
+BOLTZMANN = 1.380649e-23
+BEGIN, END = "# >>> fabmd trajectory", "# <<< fabmd trajectory"
+
+
+def sheet_input(model: BeadModel, steps: int, trajectory: TrajectoryOutput) -> str:
+    """Free motion of a sheet with fibre-fibre contact from a small random kick."""
+    from fabmd.model.beads import bead_parameters
+    from fabmd.model.contact import ContactModel
+    from fabmd.model.material import GLASS, VirtualFibre
+    from fabmd.protocols.common import DATA_FILE
+    from fabmd.scene import blocks
+    from fabmd.scene.templates import render
+
+    beads = [bead_parameters(VirtualFibre.solid(GLASS, float(model.diameters[0])))]
+    contact = ContactModel()
+    dt = 0.25 * beads[0].critical_time_step_s(contact.normal_stiffness_n_per_m(beads))
+    temperature = float(model.masses.mean()) * 0.5**2 / BOLTZMANN
+    return "\n".join([
+        blocks.setup(model, "sheet", DATA_FILE, dt), blocks.bonds(model),
+        blocks.contact(model, contact, beads), "fix             integrate all nve",
+        f"velocity        all create {temperature:.6g} 4928 dist gaussian loop geom",
+        blocks.guards(model, dt), trajectory.commands(steps), render("run", steps=steps),
+        trajectory.final_commands(), render("finish", final_data="final.data")])
+
+
+def without_trajectory(text: str) -> str:
+    """The input with every fabmd trajectory block removed."""
+    return re.sub(rf"{re.escape(BEGIN)}.*?{re.escape(END)}\n?", "", text, flags=re.S)
+
+
+def with_trajectory(text: str, trajectory: TrajectoryOutput) -> str:
+    """The input with a trajectory block (kept if it has one; else put before the first
+    run and its final frame after the last)."""
+    if BEGIN in text:
+        return text
+    steps = total_run_steps(logical_lines(text))
+    lines = text.splitlines()
+    runs = [i for i, line in enumerate(lines) if re.match(r"^\s*run\s+\d+", line)]
+    if not runs:
+        raise SystemExit("the input has no run command")
+    lines.insert(runs[-1] + 1, trajectory.final_commands())
+    lines.insert(runs[0], trajectory.commands(steps))
+    return "\n".join(lines) + "\n"
+
+
+def prepare(source: Path, name: str, text: str, dest: Path) -> Path:
+    """A fresh copy of the run folder's inputs with ``text`` as the input."""
+    dest.mkdir(parents=True)
+    for f in source.iterdir():
+        if f.suffix in (".data", ".json") and f.stem in ("model",):
+            shutil.copy(f, dest / f.name)
+    (dest / name).write_text(text)
+    return dest
+
+
+def timed(engine: Engine, folder: Path, name: str) -> float:
+    t0 = time.perf_counter()
+    engine.run(folder, name)
+    return time.perf_counter() - t0
+
+
+def measure(source: Path, name: str, text: str, trajectory: TrajectoryOutput, repeat: int,
+            engine: Engine, work: Path) -> dict:
+    plain = without_trajectory(text)
+    full = with_trajectory(text, trajectory)
+    t_plain, t_full, t_convert = [], [], []
+    report: dict = {}
+    for k in range(repeat):
+        a = prepare(source, name, plain, work / f"without-{k}")
+        t_plain.append(timed(engine, a, name))
+        b = prepare(source, name, full, work / f"with-{k}")
+        t_full.append(timed(engine, b, name))
+        t0 = time.perf_counter()
+        finalise(b, paraview=trajectory.paraview)
+        t_convert.append(time.perf_counter() - t0)
+        report = json.loads((b / "trajectory.json").read_text())
+    run_plain, run_full, convert = min(t_plain), min(t_full), min(t_convert)
+    steps = total_run_steps(logical_lines(full))
+    return {
+        "beads": report["n_beads"], "bonds": report["n_bonds"], "steps": steps,
+        "frames": report["frames"],
+        "run_without_s": run_plain, "run_with_s": run_full, "convert_s": convert,
+        "dump_mb": report["dump_bytes"] / 1e6,
+        "trajectory_h5_mb": report["trajectory_bytes"] / 1e6,
+        "paraview_mb": report.get("paraview_bytes", 0) / 1e6,
+        "lammps_cost": (run_full - run_plain) / run_plain,
+        "total_cost": (run_full + convert - run_plain) / run_plain,
+        "all_runs_s": {"without": t_plain, "with": t_full, "convert": t_convert},
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--run-dir", type=Path, help="a finished run folder to measure")
+    p.add_argument("--yarns", type=int, default=8, help="warp (= weft) yarns of the sheet")
+    p.add_argument("--fibres", default="3x2", help="fibres per yarn, across x through")
+    p.add_argument("--steps", type=int, default=10000, help="steps of the sheet run")
+    p.add_argument("--frames", type=int, default=50, help="trajectory frames")
+    p.add_argument("--velocities", action="store_true", help="store velocities too")
+    p.add_argument("--no-paraview", action="store_true", help="skip the ParaView files")
+    p.add_argument("--repeat", type=int, default=1, help="runs per variant (fastest counts)")
+    p.add_argument("--np", type=int, default=1, dest="ranks",
+                   help="MPI ranks (standalone lmp back end when > 1)")
+    p.add_argument("--threads", type=int, default=1, help="OpenMP threads")
+    p.add_argument("--keep", type=Path, help="keep the run folders here")
+    p.add_argument("--json", type=Path, help="also write the result as JSON")
+    args = p.parse_args(argv)
+
+    trajectory = TrajectoryOutput(frames=args.frames, velocities=args.velocities,
+                                  paraview=not args.no_paraview)
+    engine = Engine(backend="standalone" if args.ranks > 1 else "inprocess",
+                    ranks=args.ranks, threads=args.threads, progress=False)
+    work = Path(tempfile.mkdtemp(prefix="fabmd-bench-")) if args.keep is None else args.keep
+    try:
+        if args.run_dir is not None:
+            source = args.run_dir
+            inputs = sorted(source.glob("in.*"))
+            if not inputs or not (source / "model.data").exists():
+                raise SystemExit(f"{source} has no in.<protocol> or model.data")
+            name = inputs[0].name
+            text = inputs[0].read_text()
+            scene = f"run folder {source}"
+        else:
+            from fabmd.analysis.synthetic import woven_sheet
+
+            across, through = (int(v) for v in args.fibres.split("x"))
+            model = woven_sheet(warp_yarns=args.yarns, weft_yarns=args.yarns,
+                                fibres=(across, through))
+            source = work / "model"
+            model.save(source)
+            name = "in.sheet"
+            text = sheet_input(model, args.steps, trajectory)
+            scene = (f"synthetic plain weave {args.yarns}x{args.yarns} yarns of "
+                     f"{across}x{through} fibres, contact on")
+        result = measure(source, name, text, trajectory, args.repeat, engine, work)
+    finally:
+        if args.keep is None:
+            shutil.rmtree(work, ignore_errors=True)
+    result.update(scene=scene, ranks=args.ranks, threads=args.threads)
+    print(f"{scene}: {result['beads']} beads, {result['steps']} steps, "
+          f"{result['frames']} frames")
+    print(f"  run without trajectory  {result['run_without_s']:8.2f} s")
+    print(f"  run with trajectory     {result['run_with_s']:8.2f} s "
+          f"(LAMMPS dumps: +{100 * result['lammps_cost']:.1f} %)")
+    print(f"  conversion (h5 + VTU)   {result['convert_s']:8.2f} s")
+    print(f"  total cost              {100 * result['total_cost']:8.1f} % of the run "
+          f"({'within' if result['total_cost'] < 0.10 else 'ABOVE'} the 10 % target)")
+    print(f"  sizes: dumps {result['dump_mb']:.1f} MB, trajectory.h5 "
+          f"{result['trajectory_h5_mb']:.1f} MB, ParaView {result['paraview_mb']:.1f} MB")
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
