@@ -118,6 +118,9 @@ def measure(source: Path, name: str, text: str, trajectory: TrajectoryOutput, re
         "paraview_mb": report.get("paraview_bytes", 0) / 1e6,
         "lammps_cost": (run_full - run_plain) / run_plain,
         "total_cost": (run_full + convert - run_plain) / run_plain,
+        # what one frame costs, in time steps of this scene: frames x this / steps = cost
+        "frame_cost_steps": (run_full + convert - run_plain) / max(1, report["frames"])
+        / (run_plain / max(1, steps)),
         "all_runs_s": {"without": t_plain, "with": t_full, "convert": t_convert},
     }
 
@@ -178,6 +181,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  conversion (h5 + VTU)   {result['convert_s']:8.2f} s")
     print(f"  total cost              {100 * result['total_cost']:8.1f} % of the run "
           f"({'within' if result['total_cost'] < 0.10 else 'ABOVE'} the 10 % target)")
+    print(f"  one frame costs as much as {result['frame_cost_steps']:.0f} time steps "
+          f"(keep steps per frame above {10 * result['frame_cost_steps']:.0f} for < 10 %)")
     print(f"  sizes: dumps {result['dump_mb']:.1f} MB, trajectory.h5 "
           f"{result['trajectory_h5_mb']:.1f} MB, ParaView {result['paraview_mb']:.1f} MB")
     if args.json:

@@ -44,7 +44,7 @@ def tiny_tension(**kwargs) -> FibreTension:
 def test_trajectory_block_text():
     text = blocks.trajectory(25, velocities=True)
     assert ("dump            fabmd_trajectory all custom 25 trajectory.bin "
-            "id mol type x y z ix iy iz vx vy vz") in text
+            "id mol type xu yu zu vx vy vz") in text
     assert "dump_modify     fabmd_trajectory sort id time yes" in text
     assert "dump            fabmd_bonds all local 25 bonds.dump" in text
     assert "{{" not in text and "# >>> fabmd trajectory" in text

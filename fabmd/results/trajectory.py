@@ -243,9 +243,12 @@ def frames_from_dumps(model: BeadModel, dump: Path, bond_dump: Path | None = Non
         if not np.array_equal(ids, np.arange(1, n + 1)):
             rows = np.argsort(ids)
             fr.data = fr.data[rows]
-        lengths = fr.box_hi - fr.box_lo
-        image = np.column_stack([fr.column(c) for c in ("ix", "iy", "iz")])
-        pos = np.column_stack([fr.column(c) for c in ("x", "y", "z")]) + image * lengths
+        if "xu" in fr.columns:
+            pos = np.column_stack([fr.column(c) for c in ("xu", "yu", "zu")])
+        else:  # wrapped positions and image flags
+            image = np.column_stack([fr.column(c) for c in ("ix", "iy", "iz")])
+            pos = (np.column_stack([fr.column(c) for c in ("x", "y", "z")])
+                   + image * (fr.box_hi - fr.box_lo))
         vel = (np.column_stack([fr.column(c) for c in ("vx", "vy", "vz")])
                if "vx" in fr.columns else None)
         frame = Frame(step=fr.step, time=fr.time if fr.time is not None else np.nan,

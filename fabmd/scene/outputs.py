@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from .. import inputs
 from .templates import render
 
-#: binary LAMMPS dump of the beads (id mol type x y z ix iy iz [vx vy vz]), sorted by id
+#: binary LAMMPS dump of the beads (id mol type xu yu zu [vx vy vz]), sorted by id
 DUMP_FILE = "trajectory.bin"
 #: text LAMMPS ``dump local`` of the bonds (batom1 batom2 force)
 BOND_DUMP_FILE = "bonds.dump"
