@@ -14,7 +14,7 @@ import fabmd.results.universe
 from fabmd import analysis as A
 from fabmd.analysis.synthetic import woven_sheet
 from fabmd.engine import Engine
-from fabmd.errors import InputError
+from fabmd.errors import InputError, UnstableRun
 from fabmd.protocols.fibre_tension import FibreTension
 from fabmd.results.lammps_dump import iter_dump
 from fabmd.results.trajectory import (
@@ -238,6 +238,19 @@ def test_dump_cut_short_loses_only_its_last_frame(tmp_path):
     text = (run_dir / "bonds.dump").read_text()
     (tmp_path / "cut.dump").write_text(text[: len(text) - 30])
     assert len(list(iter_dump(tmp_path / "cut.dump"))) == len(whole) - 1
+
+
+@pytest.mark.lammps
+def test_frames_before_a_blow_up_are_kept(tmp_path, monkeypatch):
+    test = tiny_tension(trajectory=TrajectoryOutput(every_steps=5))
+    dt = test.time_step_s
+    original = FibreTension.input_text
+    monkeypatch.setattr(FibreTension, "input_text", lambda self, model: original(
+        self, model).replace(f"timestep        {dt:.10g}", f"timestep        {12 * dt:.10g}"))
+    with pytest.raises(UnstableRun):
+        test.run(tmp_path / "boom", engine=Engine(progress=False))
+    u = fabmd.load(tmp_path / "boom")
+    assert u.trajectory.n_frames >= 2  # the frames up to the blow-up, for a look in ParaView
 
 
 def _h5_contents(path) -> dict:

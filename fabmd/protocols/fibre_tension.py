@@ -15,12 +15,13 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
+from ..errors import SimulationFailed
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
 from ..model.material import GLASS, VirtualFibre
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.plots import plot_curves
-from ..results.trajectory import finalise
+from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput
@@ -150,7 +151,11 @@ class FibreTension:
         model = self.model()
         run_dir = write_run_folder(out, PROTOCOL, model, self.input_text(model),
                                    scene_dict(self), overwrite=overwrite)
-        run = run_folder(engine, run_dir, PROTOCOL)
+        try:
+            run = run_folder(engine, run_dir, PROTOCOL)
+        except SimulationFailed:
+            salvage(run_dir, paraview=self.trajectory.paraview, model=model)  # frames so far
+            raise
         trajectory = finalise(run_dir, paraview=self.trajectory.paraview, model=model)
         result = reduce(run_dir, self)
         result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,

@@ -332,6 +332,19 @@ def finalise(run_dir: Path, *, paraview: bool = True, model: BeadModel | None = 
     return Path(message) if message else None
 
 
+def salvage(run_dir: Path, *, paraview: bool = True, model: BeadModel | None = None
+            ) -> Path | None:
+    """:func:`finalise` for a run that failed: convert what the dumps hold, never raise.
+
+    Call it on every rank before re-raising the run's error, so the frames up to a
+    blow-up can be looked at.
+    """
+    try:
+        return finalise(run_dir, paraview=paraview, model=model)
+    except (FabmdError, OSError, ValueError):
+        return None
+
+
 def _finalise_on_root(run_dir: Path, paraview: bool, model: BeadModel | None) -> str:
     dump = run_dir / DUMP_FILE
     if not dump.exists():
