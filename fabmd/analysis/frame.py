@@ -91,7 +91,7 @@ class FabricFrame:
         return cls.from_model(read_model(path, frame), time_s=time_s)
 
     @classmethod
-    def from_universe(cls, u, atoms=None) -> FabricFrame:
+    def from_universe(cls, u) -> FabricFrame:
         """The current frame of a universe made by :func:`fabmd.load`."""
         info = getattr(u, "fabmd", {})
         segments = u.segments

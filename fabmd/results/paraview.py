@@ -49,6 +49,8 @@ class ParaViewSeries:
         self.pvd = self.folder / pvd_name
         self.subfolder = subfolder
         (self.folder / subfolder).mkdir(parents=True, exist_ok=True)
+        for old in (self.folder / subfolder).glob("frame_*.vtu"):  # of an earlier conversion
+            old.unlink()
         self.model = model
         self.entries: list[tuple[float, str]] = []
         self.bytes = 0

@@ -321,12 +321,16 @@ def finalise(run_dir: Path, *, paraview: bool = True, model: BeadModel | None = 
     """
     run_dir = Path(run_dir)
     message = ""
+    error: Exception | None = None
     if mpi.is_root():
         try:
             message = _finalise_on_root(run_dir, paraview, model)
-        except FabmdError as exc:
-            message = "ERR:" + str(exc)
+        except Exception as exc:  # noqa: BLE001 - every rank must hear of it, then re-raised
+            error = exc
+            message = f"ERR:cannot write the trajectory of {run_dir}: {exc}"
     message = mpi.bcast_text(message)
+    if error is not None:
+        raise error
     if message.startswith("ERR:"):
         raise InputError(message[4:])
     return Path(message) if message else None
@@ -341,7 +345,7 @@ def salvage(run_dir: Path, *, paraview: bool = True, model: BeadModel | None = N
     """
     try:
         return finalise(run_dir, paraview=paraview, model=model)
-    except (FabmdError, OSError, ValueError):
+    except Exception:  # noqa: BLE001 - best effort; the caller re-raises the run's error
         return None
 
 
