@@ -30,6 +30,8 @@ Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)
 
 Every ``step`` dataset is one dataset hard-linked into each element. Readers
 (:func:`open_trajectory`) refuse files of an unknown format or a newer version.
+MDAnalysis's own H5MD reader does not know the unit ``m``: open the file with
+:func:`fabmd.load`, whose reader keeps SI values as they are.
 """
 
 from __future__ import annotations
