@@ -71,16 +71,6 @@ def guards(model: BeadModel, time_step_s: float, every: int = 100,
                   every=every, bond_guard=bond_guard)
 
 
-def contact(model: BeadModel, contact_model: ContactModel | None,
-            beads: list[BeadParameters]) -> str:
-    """Fibre–fibre contact, or ``pair_style none`` when the scene needs none."""
-    if contact_model is None:
-        return render("contact_none")
-    c = contact_model.pair_coefficients(beads)
-    return render("contact_granular", normal=contact_model.normal,
-                  style=contact_model.pair_style(), **c)
-
-
 def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True) -> str:
     """Outputs block: a trajectory frame every ``every`` steps (see
     :mod:`fabmd.scene.outputs`; put :func:`trajectory_final` after the last run and call
@@ -91,3 +81,14 @@ def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True
 def trajectory_final(bond_forces: bool = True) -> str:
     """After the last run: the final step as the trajectory's last frame."""
     return outputs.trajectory_final(bond_forces)
+
+
+def contact(model: BeadModel, contact_model: ContactModel | None,
+            beads: list[BeadParameters]) -> str:
+    """Fibre–fibre contact, or ``pair_style none`` when the scene needs none."""
+    if contact_model is None:
+        return render("contact_none")
+    c = contact_model.pair_coefficients(beads)
+    return render("contact_granular", normal=contact_model.normal,
+                  style=contact_model.pair_style(), **c)
+

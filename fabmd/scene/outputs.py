@@ -31,7 +31,7 @@ def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True
     every = inputs.positive_int("trajectory.every", every)
     bond_dump = (render("trajectory_bonds", every=every, bond_file=bond_file) if bond_forces
                  else "# no bond forces in this trajectory")
-    return render("trajectory", every=every, dump_file=dump_file,
+    return render("trajectory_dump", every=every, dump_file=dump_file,
                   velocity_columns=" vx vy vz" if velocities else "", bond_dump=bond_dump)
 
 
