@@ -91,4 +91,3 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
     c = contact_model.pair_coefficients(beads)
     return render("contact_granular", normal=contact_model.normal,
                   style=contact_model.pair_style(), **c)
-
