@@ -104,6 +104,13 @@ def timed(action) -> tuple[float, float]:
     return cpu_seconds() - c0, time.perf_counter() - w0
 
 
+def steps_run(log: Path) -> int | None:
+    """Steps LAMMPS ran (a run stopped early by fix halt counts what it did)."""
+    found = re.findall(r"^Loop time of \S+ on \d+ procs for (\d+) steps", log.read_text(
+        errors="replace"), flags=re.M)
+    return sum(int(n) for n in found) if found else None
+
+
 def output_seconds(log: Path) -> float:
     """Time LAMMPS spent in output (dumps, thermo), summed over the runs of a log [s]."""
     total = 0.0
@@ -135,7 +142,7 @@ def measure(source: Path, name: str, text: str, trajectory: TrajectoryOutput, re
     best = {key: (min(c for c, _ in v), min(w for _, w in v)) for key, v in runs.items()}
     (plain_cpu, plain_wall), (full_cpu, full_wall) = best["without"], best["with"]
     convert_cpu, convert_wall = best["convert"]
-    steps = total_run_steps(logical_lines(full))
+    steps = steps_run(a / "log.lammps") or total_run_steps(logical_lines(full))
     frames = max(1, report["frames"])
     return {
         "beads": report["n_beads"], "bonds": report["n_bonds"], "steps": steps,
