@@ -48,7 +48,9 @@ class TrajectoryOutput:
 
     Args:
         frames: about how many frames over the run (>= 0; 0 writes no trajectory).
-            The first and the last step are always frames.
+            The first and the last step are always frames. For a run that may stop
+            early (a quasi-static criterion), :meth:`every` is asked with the steps
+            the protocol expects, or ``every_steps`` is given.
         every_steps: steps between frames; overrides ``frames`` when given (>= 1).
         velocities: store bead velocities [m/s].
         bond_forces: store the axial force [N] of every bond.
