@@ -5,7 +5,6 @@ from __future__ import annotations
 from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
 from ..model.contact import ContactModel
-from . import outputs
 from .templates import fmt, render
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
@@ -75,11 +74,15 @@ def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True
     """Outputs block: a trajectory frame every ``every`` steps (see
     :mod:`fabmd.scene.outputs`; put :func:`trajectory_final` after the last run and call
     :func:`fabmd.results.trajectory.finalise` on the run folder afterwards)."""
+    from . import outputs
+
     return outputs.trajectory(every, velocities=velocities, bond_forces=bond_forces)
 
 
 def trajectory_final(bond_forces: bool = True) -> str:
     """After the last run: the final step as the trajectory's last frame."""
+    from . import outputs
+
     return outputs.trajectory_final(bond_forces)
 
 
