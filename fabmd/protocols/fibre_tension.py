@@ -15,13 +15,16 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
+from ..errors import SimulationFailed
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
 from ..model.material import GLASS, VirtualFibre
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.plots import plot_curves
+from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
+from ..scene.outputs import TrajectoryOutput
 from ..scene.templates import render
 from .common import DATA_FILE, run_folder, scene_dict, write_run_folder
 
@@ -47,6 +50,8 @@ class FibreTension:
             quasi-static when small (default 1e-4).
         ramp_transits: smooth-start time in axial wave-transit times L0/c.
         samples: number of curve points written.
+        trajectory: trajectory frames written (``trajectory.h5``, ParaView files;
+            ``TrajectoryOutput(frames=0)`` writes none).
     """
 
     fibre: VirtualFibre = field(default_factory=default_fibre)
@@ -57,6 +62,7 @@ class FibreTension:
     speed_fraction: float = 1e-4
     ramp_transits: float = 10.0
     samples: int = 300
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
     def __post_init__(self):
         inputs.positive("fibre_tension.length_m", self.length_m)
@@ -131,7 +137,9 @@ class FibreTension:
                    displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
                    every=every, thermo_every=max(every, self.steps // 20)),
             blocks.guards(model, dt),
+            self.trajectory.commands(self.steps),
             render("run", steps=self.steps),
+            self.trajectory.final_commands(),
             render("finish", final_data="final.data"),
         ])
 
@@ -143,9 +151,15 @@ class FibreTension:
         model = self.model()
         run_dir = write_run_folder(out, PROTOCOL, model, self.input_text(model),
                                    scene_dict(self), overwrite=overwrite)
-        run = run_folder(engine, run_dir, PROTOCOL)
+        try:
+            run = run_folder(engine, run_dir, PROTOCOL)
+        except SimulationFailed:
+            salvage(run_dir, paraview=self.trajectory.paraview, model=model)  # frames so far
+            raise
+        trajectory = finalise(run_dir, paraview=self.trajectory.paraview, model=model)
         result = reduce(run_dir, self)
-        result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
+        result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
+                              trajectory=trajectory.name if trajectory else None)
         result.write()
         # every rank returns rank 0's summary; the curve stays on rank 0
         result.summary = mpi.bcast_json(result.summary)

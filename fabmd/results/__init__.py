@@ -1,1 +1,9 @@
-"""Results: run folders, curves, summaries, plots and trajectories."""
+"""Results: run folders, curves, summaries, plots and trajectories.
+
+* :mod:`.folder` — run folders, CSV/JSON;
+* :mod:`.plots` — curves and fields with units on the axes;
+* :mod:`.trajectory` — ``trajectory.h5`` (H5MD) from the LAMMPS dumps (``finalise``);
+* :mod:`.paraview` — ``trajectory.pvd`` + ``paraview/frame_*.vtu``;
+* :mod:`.universe` — :func:`fabmd.load`, results as MDAnalysis universes;
+* :mod:`.lammps_dump` — readers of LAMMPS binary and text dumps.
+"""

@@ -81,6 +81,22 @@ def guards(model: BeadModel, time_step_s: float, every: int = 20,
                   every=every, bond_guard=bond_guard)
 
 
+def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True) -> str:
+    """Outputs block: a trajectory frame every ``every`` steps (see
+    :mod:`fabmd.scene.outputs`; put :func:`trajectory_final` after the last run and call
+    :func:`fabmd.results.trajectory.finalise` on the run folder afterwards)."""
+    from . import outputs
+
+    return outputs.trajectory(every, velocities=velocities, bond_forces=bond_forces)
+
+
+def trajectory_final(bond_forces: bool = True) -> str:
+    """After the last run: the final step as the trajectory's last frame."""
+    from . import outputs
+
+    return outputs.trajectory_final(bond_forces)
+
+
 def contact(model: BeadModel, contact_model: ContactModel | None,
             beads: list[BeadParameters]) -> str:
     """Fibre–fibre contact, or ``pair_style none`` when the scene needs none."""

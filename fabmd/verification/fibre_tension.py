@@ -11,7 +11,8 @@ TOLERANCE = 0.01
 
 #: settings ``--set KEY=VALUE`` may change, and where they go
 SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "length_m", "spacing_ratio",
-            "mass_scaling", "time_step_factor", "time_step_s", "max_strain", "speed_fraction")
+            "mass_scaling", "time_step_factor", "time_step_s", "max_strain", "speed_fraction",
+            "trajectory_frames")
 
 
 def from_settings(settings: dict[str, float]) -> FibreTension:
@@ -19,6 +20,7 @@ def from_settings(settings: dict[str, float]) -> FibreTension:
     from ..errors import InputError
     from ..model.beads import Discretisation, TimeStep
     from ..model.material import GLASS, FibreMaterial, VirtualFibre
+    from ..scene.outputs import TrajectoryOutput
 
     unknown = set(settings) - set(SETTINGS)
     if unknown:
@@ -33,7 +35,8 @@ def from_settings(settings: dict[str, float]) -> FibreTension:
     step = TimeStep(factor=get("time_step_factor", 0.25), value_s=get("time_step_s"))
     return FibreTension(fibre=fibre, length_m=get("length_m", 0.01), discretisation=disc,
                         time_step=step, max_strain=get("max_strain", 0.015),
-                        speed_fraction=get("speed_fraction", 1e-4))
+                        speed_fraction=get("speed_fraction", 1e-4),
+                        trajectory=TrajectoryOutput(frames=get("trajectory_frames", 20)))
 
 
 def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool = False,

@@ -1,0 +1,50 @@
+"""Analysis of fabric states (pure numpy, SI): yarn centrelines and curvature, crimp,
+yarn cross-sections, in-plane yarn angles and the shear-angle field.
+
+Every function works on a :class:`FabricFrame` — the unwrapped bead positions of
+one frame with their fibre/yarn identity — made from a bead model, a trajectory
+frame or an MDAnalysis universe::
+
+    import fabmd
+    from fabmd import analysis
+
+    u = fabmd.load("runs/crimp")
+    frame = analysis.FabricFrame.from_universe(u)          # the current frame
+    analysis.crimp_by_family(frame)                        # {"warp": 0.012, ...}
+    field = analysis.shear_angle_field(frame, cells=(8, 8))
+"""
+
+from .angles import Field, in_plane_angle_field, segment_directions, shear_angle_field
+from .frame import FabricFrame
+from .sections import CrossSection, convex_hull, cross_section
+from .yarns import (
+    centreline,
+    crimp,
+    crimp_by_family,
+    crimp_by_yarn,
+    curvature,
+    path_length,
+    resample,
+    yarn_centreline,
+    yarn_centrelines,
+)
+
+__all__ = [
+    "CrossSection",
+    "FabricFrame",
+    "Field",
+    "centreline",
+    "convex_hull",
+    "crimp",
+    "crimp_by_family",
+    "crimp_by_yarn",
+    "cross_section",
+    "curvature",
+    "in_plane_angle_field",
+    "path_length",
+    "resample",
+    "segment_directions",
+    "shear_angle_field",
+    "yarn_centreline",
+    "yarn_centrelines",
+]

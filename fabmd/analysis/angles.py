@@ -1,0 +1,162 @@
+"""Local in-plane yarn angles and the shear-angle field.
+
+Every bead-to-bead segment of a fibre has an in-plane direction θ (from the x
+axis, in the xy fabric plane). Yarn directions are axial (θ and θ + 180° are the
+same yarn), so they are averaged per grid cell as doubled angles, weighted by
+the segment's in-plane length: θ̄ = ½·atan2(Σ w sin 2θ, Σ w cos 2θ) in (−90°, 90°].
+
+The shear angle of a cell is γ = 90° − (θ_weft − θ_warp), the difference taken
+in [0°, 180°): 0 for an unsheared fabric, positive when the weft has turned
+towards the warp.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from .frame import FabricFrame
+
+
+@dataclass
+class Field:
+    """A scalar field on a regular xy grid (cell values; NaN where a cell has no data).
+
+    ``values[j, i]`` belongs to the cell between ``x_edges_m[i:i+2]`` and
+    ``y_edges_m[j:j+2]`` (the layout ``matplotlib.pcolormesh`` takes).
+    """
+
+    x_edges_m: np.ndarray
+    y_edges_m: np.ndarray
+    values: np.ndarray
+    name: str
+    unit: str
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def x_centres_m(self) -> np.ndarray:
+        return 0.5 * (self.x_edges_m[1:] + self.x_edges_m[:-1])
+
+    @property
+    def y_centres_m(self) -> np.ndarray:
+        return 0.5 * (self.y_edges_m[1:] + self.y_edges_m[:-1])
+
+    @property
+    def label(self) -> str:
+        return f"{self.name} [{self.unit}]"
+
+    def figure(self, **kwargs):
+        """A matplotlib figure of the field with units on the axes and colour bar
+        (keyword arguments go to :func:`fabmd.results.plots.field_figure`)."""
+        from ..results.plots import field_figure
+
+        kwargs.setdefault("symmetric", self.unit == "°" and "shear" in self.name)
+        return field_figure(self.x_edges_m, self.y_edges_m, self.values, self.label, **kwargs)
+
+    def mean(self) -> float:
+        """Mean over the cells that hold a value."""
+        v = self.values[np.isfinite(self.values)]
+        return float(v.mean()) if v.size else float("nan")
+
+
+def segment_directions(frame: FabricFrame, family: str | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Midpoints (wrapped into the box where periodic) and vectors of all fibre segments
+    of one family (or all), including the segment that closes a periodic fibre [m]."""
+    fibres = [f for name in frame.yarns(family) for f in frame.fibres_of_yarn(name)]
+    mids, vecs = [], []
+    for f in fibres:
+        p = frame.fibre_path(f)
+        mids.append(0.5 * (p[1:] + p[:-1]))
+        vecs.append(np.diff(p, axis=0))
+    if not mids:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    mid = np.vstack(mids)
+    lengths = frame.box_lengths
+    for k in range(3):
+        if frame.periodic[k]:
+            mid[:, k] = frame.box_lo[k] + np.mod(mid[:, k] - frame.box_lo[k], lengths[k])
+    return mid, np.vstack(vecs)
+
+
+def _grid(frame: FabricFrame, points: np.ndarray, cells, extent):
+    nx, ny = (int(c) for c in cells)
+    if nx < 1 or ny < 1:
+        raise InputError(f"cells must be two integers >= 1, got {cells}")
+    if extent is None:
+        lo = points[:, :2].min(axis=0) if len(points) else frame.box_lo[:2].copy()
+        hi = points[:, :2].max(axis=0) if len(points) else frame.box_hi[:2].copy()
+        pad = 1e-9 * np.maximum(hi - lo, 1e-12)  # points on the far edge stay inside
+        lo, hi = lo - pad, hi + pad
+        for k in range(2):
+            if frame.periodic[k]:
+                lo[k], hi[k] = frame.box_lo[k], frame.box_hi[k]
+    else:
+        (lo_x, hi_x), (lo_y, hi_y) = extent
+        lo, hi = np.array([lo_x, lo_y], float), np.array([hi_x, hi_y], float)
+    return np.linspace(lo[0], hi[0], nx + 1), np.linspace(lo[1], hi[1], ny + 1)
+
+
+def _cell_index(points: np.ndarray, xe: np.ndarray, ye: np.ndarray):
+    nx, ny = len(xe) - 1, len(ye) - 1
+    i = np.searchsorted(xe, points[:, 0], side="right") - 1
+    j = np.searchsorted(ye, points[:, 1], side="right") - 1
+    inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
+    return j[inside] * nx + i[inside], inside
+
+
+def _mean_axial_angle(points, vectors, xe, ye) -> tuple[np.ndarray, np.ndarray]:
+    """Doubled-angle mean direction [rad] and summed in-plane length per cell."""
+    nx, ny = len(xe) - 1, len(ye) - 1
+    flat, inside = _cell_index(points, xe, ye)
+    v = vectors[inside]
+    w = np.hypot(v[:, 0], v[:, 1])
+    theta = np.arctan2(v[:, 1], v[:, 0])
+    c = np.bincount(flat, w * np.cos(2 * theta), nx * ny)
+    s = np.bincount(flat, w * np.sin(2 * theta), nx * ny)
+    weight = np.bincount(flat, w, nx * ny)
+    angle = 0.5 * np.arctan2(s, c)
+    angle[weight <= 0] = np.nan
+    return angle.reshape(ny, nx), weight.reshape(ny, nx)
+
+
+def in_plane_angle_field(frame: FabricFrame, family: str, cells=(10, 10),
+                         extent=None) -> Field:
+    """Local in-plane direction of the yarns of one family, in degrees from x.
+
+    Args:
+        frame: the fabric state.
+        family: yarn family (e.g. ``"warp"``).
+        cells: grid cells along x and y.
+        extent: ((x_min, x_max), (y_min, y_max)) [m]; default: the box in periodic
+            directions, else the extent of the fibres.
+    """
+    points, vectors = segment_directions(frame, family)
+    xe, ye = _grid(frame, points, cells, extent)
+    angle, weight = _mean_axial_angle(points, vectors, xe, ye)
+    return Field(xe, ye, np.degrees(angle), f"{family} yarn angle", "°",
+                 extra={"length_m": weight})
+
+
+def shear_angle_field(frame: FabricFrame, warp: str = "warp", weft: str = "weft",
+                      cells=(10, 10), extent=None) -> Field:
+    """Shear angle γ = 90° − (θ_weft − θ_warp) per grid cell, in degrees.
+
+    ``extra`` holds the warp and weft angle fields (``warp_angle_deg``,
+    ``weft_angle_deg``). Cells without both families are NaN: make cells at least
+    one yarn spacing wide.
+    """
+    pw, vw = segment_directions(frame, warp)
+    pf, vf = segment_directions(frame, weft)
+    if not len(pw) or not len(pf):
+        raise InputError(f"shear angle needs yarns of both families {warp!r} and {weft!r}; "
+                         f"the fabric has {frame.families}")
+    xe, ye = _grid(frame, np.vstack([pw, pf]), cells, extent)
+    tw, _ = _mean_axial_angle(pw, vw, xe, ye)
+    tf, _ = _mean_axial_angle(pf, vf, xe, ye)
+    between = np.mod(tf - tw, np.pi)
+    gamma = np.degrees(0.5 * np.pi - between)
+    return Field(xe, ye, gamma, "shear angle γ", "°",
+                 extra={"warp_angle_deg": np.degrees(tw), "weft_angle_deg": np.degrees(tf)})

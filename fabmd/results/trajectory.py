@@ -1,0 +1,464 @@
+"""Trajectories in the H5MD layout: ``trajectory.h5`` in every run folder.
+
+LAMMPS here has no H5MD dump, so a protocol's outputs block
+(:class:`fabmd.scene.outputs.TrajectoryOutput`) makes LAMMPS write a sorted
+binary dump (``trajectory.bin``) and a bond dump (``bonds.dump``) on rank 0;
+after the run :func:`finalise` (rank 0 only) turns them into ``trajectory.h5``
+and the ParaView series ``trajectory.pvd`` + ``paraview/frame_*.vtu``. The
+dumps stay beside them for OVITO.
+
+Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)::
+
+    /                      attrs fabmd_format="fabmd-trajectory", fabmd_format_version=1
+    /h5md                  attrs version=[1, 1]; author/, creator/ (name, version)
+    /particles/all/
+        box/               attrs dimension=3, boundary=["periodic"|"none"] x 3
+            edges/         step [nf], time [nf] s, value [nf, 3] m (box lengths)
+        position/          step, time, value [nf, N, 3] m — unwrapped (fibres never torn
+                           at periodic faces; wrap with the box if needed)
+        velocity/          (optional) value [nf, N, 3] m/s
+        species [N]        family code = LAMMPS atom type (1-based)
+        fibre_id [N]       virtual fibre = LAMMPS molecule id (1-based)
+        yarn_id [N]        yarn (1-based)
+        mass [N] kg, diameter [N] m
+    /connectivity/bonds    [nb, 2] 0-based bead indices; attr particles_group
+    /observables/
+        box_offset/        step, time, value [nf, 3] m (lower box corner)
+        bond_force/        (optional) value [nf, nb] N, axial force, > 0 in tension
+    /parameters/fabmd      attrs family_names, yarn_names, yarn_families, model_json;
+                           datasets fibre_yarn [n_fibres], bond_type [nb]
+
+Every ``step`` dataset is one dataset hard-linked into each element. Readers
+(:func:`open_trajectory`) refuse files of an unknown format or a newer version.
+MDAnalysis's own H5MD reader does not know the unit ``m``: open the file with
+:func:`fabmd.load`, whose reader keeps SI values as they are.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..engine import mpi
+from ..errors import FabmdError, InputError
+from ..model.bead_model import BeadModel
+from ..scene.outputs import BOND_DUMP_FILE, DUMP_FILE
+from .paraview import PARAVIEW_DIR, PVD_FILE  # noqa: F401 - file names of a run folder
+
+FORMAT = "fabmd-trajectory"
+FORMAT_VERSION = 1
+H5MD_VERSION = (1, 1)
+
+TRAJECTORY_FILE = "trajectory.h5"
+
+#: gzip (readable by every HDF5 build, ParaView and h5py alike) after byte shuffling;
+#: level 1: higher levels cost more time and gain little on floating-point data
+COMPRESSION = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+
+
+class TrajectoryFormatError(FabmdError):
+    """A file is not a fabmd trajectory, or one of a version this fabmd cannot read."""
+
+
+# -- writing ------------------------------------------------------------------------------
+class TrajectoryWriter:
+    """Write frames of one bead model into an H5MD file (serial; call on rank 0).
+
+    The file is written as ``<path>.part`` and renamed when closed, so a reader
+    never sees half a file.
+
+    Args:
+        path: the ``.h5`` file to write.
+        model: the bead model (topology, yarns, families, masses, diameters).
+        velocities: frames carry velocities.
+        bond_data: frames carry bond forces.
+    """
+
+    def __init__(self, path: Path, model: BeadModel, *, velocities: bool = False,
+                 bond_data: bool = False):
+        import h5py
+
+        from .. import __version__
+
+        self.path = Path(path)
+        self.partial = self.path.with_name(self.path.name + ".part")
+        self.model = model
+        self.velocities = velocities
+        self.bond_data = bond_data and model.n_bonds > 0
+        n, nb = model.n_beads, model.n_bonds
+        self.n_frames = 0
+        f = self.file = h5py.File(self.partial, "w")
+        f.attrs["fabmd_format"] = FORMAT
+        f.attrs["fabmd_format_version"] = FORMAT_VERSION
+        h5md = f.create_group("h5md")
+        h5md.attrs["version"] = np.array(H5MD_VERSION, dtype=np.int32)
+        h5md.create_group("author").attrs["name"] = "fabmd"
+        creator = h5md.create_group("creator")
+        creator.attrs["name"] = "fabmd"
+        creator.attrs["version"] = __version__
+
+        part = f.create_group("particles/all")
+        self.step = f.create_dataset("step", shape=(0,), maxshape=(None,), dtype=np.int64,
+                                     chunks=(1024,))
+        self.time = f.create_dataset("time", shape=(0,), maxshape=(None,), dtype=np.float64,
+                                     chunks=(1024,))
+        self.time.attrs["unit"] = "s"
+        box = part.create_group("box")
+        box.attrs["dimension"] = np.int32(3)
+        box.attrs["boundary"] = np.array(["periodic" if p else "none" for p in model.periodic],
+                                         dtype=h5py.string_dtype())
+        self.edges = self._element(box, "edges", (3,), "m", compress=False)
+        self.position = self._element(part, "position", (n, 3), "m")
+        self.velocity = (self._element(part, "velocity", (n, 3), "m s-1") if velocities
+                         else None)
+        for name, values, unit in (("species", model.atom_types, None),
+                                   ("fibre_id", model.fibre_ids, None),
+                                   ("yarn_id", model.yarn_ids, None),
+                                   ("mass", model.masses, "kg"),
+                                   ("diameter", model.diameters, "m")):
+            dtype = np.int32 if unit is None else np.float64
+            d = part.create_dataset(name, data=np.asarray(values, dtype=dtype))
+            if unit:
+                d.attrs["unit"] = unit
+        bonds = f.create_group("connectivity").create_dataset(
+            "bonds", data=np.asarray(model.bonds, np.int32).reshape(-1, 2))
+        bonds.attrs["particles_group"] = part.ref
+        obs = f.create_group("observables")
+        self.offset = self._element(obs, "box_offset", (3,), "m", compress=False)
+        if self.bond_data:
+            self.bond_force = self._element(obs, "bond_force", (nb,), "N")
+            self.bond_force.attrs["sign"] = "positive in tension"
+        params = f.create_group("parameters/fabmd")
+        params.attrs["family_names"] = np.array(model.family_names, dtype=h5py.string_dtype())
+        params.attrs["yarn_names"] = np.array([y.name for y in model.yarns],
+                                              dtype=h5py.string_dtype())
+        params.attrs["yarn_families"] = np.array([y.family for y in model.yarns],
+                                                 dtype=h5py.string_dtype())
+        params.attrs["model_json"] = json.dumps(model.metadata())
+        params.create_dataset("fibre_yarn", data=np.asarray(model.fibre_yarn, np.int32))
+        params.create_dataset("bond_type", data=np.asarray(model.bond_types, np.int32))
+        # step and time live on through the hard links of the elements
+        del f["step"], f["time"]
+
+    def _element(self, group, name: str, shape: tuple[int, ...], unit: str,
+                 compress: bool = True):
+        """A time-dependent H5MD element: hard links to step and time, plus value."""
+        g = group.create_group(name)
+        g["step"] = self.step
+        g["time"] = self.time
+        chunk_rows = shape[0] if len(shape) == 1 else min(shape[0], 1 << 16)
+        chunks = (1, chunk_rows) + tuple(shape[1:])
+        options = COMPRESSION if compress and np.prod(shape) > 64 else {}
+        value = g.create_dataset("value", shape=(0,) + shape, maxshape=(None,) + shape,
+                                 dtype=np.float64, chunks=chunks, **options)
+        value.attrs["unit"] = unit
+        return value
+
+    def append(self, step: int, time: float, box_lo, box_hi, positions, velocities=None,
+               bond_force=None) -> None:
+        """Add one frame (positions unwrapped, SI)."""
+        i = self.n_frames
+        self.n_frames += 1
+        self.step.resize((i + 1,))
+        self.time.resize((i + 1,))
+        self.step[i] = step
+        self.time[i] = time
+        box_lo = np.asarray(box_lo, float)
+        for ds, value in ((self.edges, np.asarray(box_hi, float) - box_lo),
+                          (self.offset, box_lo), (self.position, positions),
+                          (self.velocity, velocities)):
+            if ds is None:
+                continue
+            if value is None:
+                raise InputError(f"frame {i}: {ds.name} was announced but not given")
+            ds.resize(i + 1, axis=0)
+            ds[i] = value
+        if self.bond_data:
+            self.bond_force.resize(i + 1, axis=0)
+            self.bond_force[i] = np.nan if bond_force is None else bond_force
+
+    def close(self) -> Path:
+        """Close and move the file into place; returns its path."""
+        if self.file:
+            self.file.close()
+            self.file = None
+            os.replace(self.partial, self.path)
+        return self.path
+
+    def abort(self) -> None:
+        """Close and delete the partial file."""
+        if self.file:
+            self.file.close()
+            self.file = None
+        self.partial.unlink(missing_ok=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+@dataclass
+class Frame:
+    """One trajectory frame (SI): unwrapped positions, box, optional extras."""
+
+    step: int
+    time: float
+    box_lo: np.ndarray
+    box_hi: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray | None = None
+    bond_force: np.ndarray | None = None
+
+
+def _bond_index(model: BeadModel) -> tuple[np.ndarray, np.ndarray]:
+    """Sorted pair keys of the model's bonds and the bond index of each key."""
+    a, b = model.bonds[:, 0], model.bonds[:, 1]
+    keys = np.minimum(a, b) * model.n_beads + np.maximum(a, b)
+    order = np.argsort(keys, kind="stable")
+    return keys[order], order
+
+
+def frames_from_dumps(model: BeadModel, dump: Path, bond_dump: Path | None = None
+                      ) -> Iterator[Frame]:
+    """Frames of a run's dumps, with bond data put into the model's bond order."""
+    from .lammps_dump import iter_dump
+
+    bond_frames = iter_dump(bond_dump) if bond_dump is not None else None
+    keys, order = _bond_index(model) if bond_dump is not None else (None, None)
+    pending = None
+    n = model.n_beads
+    for fr in iter_dump(dump):
+        if fr.data.shape[0] != n:
+            raise InputError(f"{dump}: frame at step {fr.step} has {fr.data.shape[0]} beads, "
+                             f"the model {n}")
+        ids = fr.column("id").astype(np.int64)
+        if not np.array_equal(ids, np.arange(1, n + 1)):
+            rows = np.argsort(ids)
+            fr.data = fr.data[rows]
+        if "xu" in fr.columns:
+            pos = np.column_stack([fr.column(c) for c in ("xu", "yu", "zu")])
+        else:  # wrapped positions and image flags
+            image = np.column_stack([fr.column(c) for c in ("ix", "iy", "iz")])
+            pos = (np.column_stack([fr.column(c) for c in ("x", "y", "z")])
+                   + image * (fr.box_hi - fr.box_lo))
+        vel = (np.column_stack([fr.column(c) for c in ("vx", "vy", "vz")])
+               if "vx" in fr.columns else None)
+        frame = Frame(step=fr.step, time=fr.time if fr.time is not None else np.nan,
+                      box_lo=fr.box_lo, box_hi=fr.box_hi, positions=pos, velocities=vel)
+        if bond_frames is not None:
+            while pending is None or pending.step < fr.step:
+                pending = next(bond_frames, None)
+                if pending is None:
+                    break
+            if pending is not None and pending.step == fr.step:
+                frame.bond_force = _bonds_in_model_order(model, keys, order, pending)
+        yield frame
+
+
+def _bonds_in_model_order(model, keys, order, fr) -> np.ndarray:
+    a = fr.column("batom1").astype(np.int64) - 1
+    b = fr.column("batom2").astype(np.int64) - 1
+    k = np.minimum(a, b) * model.n_beads + np.maximum(a, b)
+    where = np.searchsorted(keys, k)
+    where = np.clip(where, 0, len(keys) - 1)
+    found = keys[where] == k
+    force = np.full(model.n_bonds, np.nan)
+    # compute bond/local reports -dE/dr: negative when the bond pulls, so tension = -force
+    force[order[where[found]]] = -fr.column("force")[found]
+    return force
+
+
+def write_trajectory(path: Path, model: BeadModel, frames, *, velocities: bool = False,
+                     bond_data: bool = False, paraview_dir: Path | None = None) -> dict:
+    """Write ``frames`` into an H5MD file (and a ParaView series if ``paraview_dir``).
+
+    Returns a dict of what was written: frames, sizes in bytes, seconds spent.
+    """
+    import time as _time
+
+    from .paraview import ParaViewSeries
+
+    t0 = _time.perf_counter()
+    pv = ParaViewSeries(paraview_dir, model) if paraview_dir is not None else None
+    with TrajectoryWriter(path, model, velocities=velocities, bond_data=bond_data) as w:
+        for fr in frames:
+            w.append(fr.step, fr.time, fr.box_lo, fr.box_hi, fr.positions, fr.velocities,
+                     fr.bond_force)
+            if pv is not None:
+                pv.append(fr)
+        n_frames = w.n_frames
+    report = {"frames": n_frames, "trajectory_bytes": Path(path).stat().st_size}
+    if pv is not None:
+        report["paraview_bytes"] = pv.close()
+        report["paraview"] = str(pv.pvd)
+    report["convert_s"] = _time.perf_counter() - t0
+    return report
+
+
+def finalise(run_dir: Path, *, paraview: bool = True, model: BeadModel | None = None
+             ) -> Path | None:
+    """Turn a finished run's LAMMPS dumps into ``trajectory.h5`` (+ ParaView files).
+
+    Call it on every rank after the run: rank 0 converts, the others wait. A
+    run folder without ``trajectory.bin`` (trajectory switched off) is left as
+    it is. Writes ``trajectory.json`` (frames, sizes, seconds) beside it.
+
+    Args:
+        run_dir: the run folder (holds ``model.data``/``model.json`` and the dumps).
+        paraview: also write ``trajectory.pvd`` and ``paraview/frame_*.vtu``.
+        model: the bead model run (default: read from the run folder).
+
+    Returns:
+        The path of ``trajectory.h5`` on every rank, or None when there is no dump.
+    """
+    run_dir = Path(run_dir)
+    message = ""
+    error: Exception | None = None
+    if mpi.is_root():
+        try:
+            message = _finalise_on_root(run_dir, paraview, model)
+        except Exception as exc:  # noqa: BLE001 - every rank must hear of it, then re-raised
+            error = exc
+            message = f"ERR:cannot write the trajectory of {run_dir}: {exc}"
+    message = mpi.bcast_text(message)
+    if error is not None:
+        raise error
+    if message.startswith("ERR:"):
+        raise InputError(message[4:])
+    return Path(message) if message else None
+
+
+def salvage(run_dir: Path, *, paraview: bool = True, model: BeadModel | None = None
+            ) -> Path | None:
+    """:func:`finalise` for a run that failed: convert what the dumps hold, never raise.
+
+    Call it on every rank before re-raising the run's error, so the frames up to a
+    blow-up can be looked at.
+    """
+    try:
+        return finalise(run_dir, paraview=paraview, model=model)
+    except Exception:  # noqa: BLE001 - best effort; the caller re-raises the run's error
+        return None
+
+
+def _finalise_on_root(run_dir: Path, paraview: bool, model: BeadModel | None) -> str:
+    dump = run_dir / DUMP_FILE
+    if not dump.exists():
+        return ""
+    if model is None:
+        model = BeadModel.load(run_dir / "model.data", run_dir / "model.json")
+    bond_dump = run_dir / BOND_DUMP_FILE
+    bond_dump = bond_dump if bond_dump.exists() and model.n_bonds else None
+    velocities = _has_velocities(dump)
+    report = write_trajectory(run_dir / TRAJECTORY_FILE, model,
+                              frames_from_dumps(model, dump, bond_dump), velocities=velocities,
+                              bond_data=bond_dump is not None,
+                              paraview_dir=run_dir if paraview else None)
+    report["dump_bytes"] = dump.stat().st_size + (bond_dump.stat().st_size if bond_dump
+                                                  else 0)
+    report.update(n_beads=model.n_beads, n_bonds=model.n_bonds, format=FORMAT,
+                  format_version=FORMAT_VERSION)
+    (run_dir / "trajectory.json").write_text(json.dumps(report, indent=2) + "\n")
+    return str(run_dir / TRAJECTORY_FILE)
+
+
+def _has_velocities(dump: Path) -> bool:
+    from .lammps_dump import iter_dump
+
+    first = next(iter_dump(dump), None)
+    return first is not None and "vx" in first.columns
+
+
+def write_snapshot(model: BeadModel, path: Path, *, step: int = 0, time_s: float = 0.0,
+                   paraview_dir: Path | None = None) -> Path:
+    """A one-frame trajectory of a bead model (e.g. a generated fabric before any run)."""
+    frame = Frame(step=step, time=time_s, box_lo=model.box_lo, box_hi=model.box_hi,
+                  positions=model.unwrapped_positions)
+    write_trajectory(Path(path), model, [frame], paraview_dir=paraview_dir)
+    return Path(path)
+
+
+# -- reading ------------------------------------------------------------------------------
+def check_format(f, path: Path | str = "") -> int:
+    """The format version of an open file; raise if it is not one this fabmd reads."""
+    where = f" {path}" if path else ""
+    fmt = f.attrs.get("fabmd_format")
+    if isinstance(fmt, bytes):
+        fmt = fmt.decode()
+    if fmt != FORMAT:
+        raise TrajectoryFormatError(f"{where.strip() or 'file'} is not a fabmd trajectory "
+                                    f"(fabmd_format = {fmt!r}, expected {FORMAT!r})")
+    version = int(f.attrs.get("fabmd_format_version", -1))
+    if not 1 <= version <= FORMAT_VERSION:
+        raise TrajectoryFormatError(
+            f"trajectory{where} has format version {version}; this fabmd reads versions "
+            f"1..{FORMAT_VERSION} (update fabmd to read it)")
+    return version
+
+
+def open_trajectory(path: Path):
+    """Open a trajectory read-only (an ``h5py.File``) after checking its format."""
+    import h5py
+
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"no trajectory at {path}")
+    f = h5py.File(path, "r")
+    try:
+        check_format(f, path)
+    except Exception:
+        f.close()
+        raise
+    return f
+
+
+def _strings(values) -> list[str]:
+    return [v.decode() if isinstance(v, bytes) else str(v) for v in values]
+
+
+def read_model(path: Path, frame: int = -1) -> BeadModel:
+    """The bead model stored in a trajectory, with the positions of one frame."""
+    from ..model.bead_model import AngleType, BondType, Yarn
+
+    with open_trajectory(path) as f:
+        meta = json.loads(f["parameters/fabmd"].attrs["model_json"])
+        part = f["particles/all"]
+        positions = part["position/value"][frame]
+        lengths = part["box/edges/value"][frame]
+        lo = f["observables/box_offset/value"][frame]
+        species = part["species"][()]
+        fibre_ids = part["fibre_id"][()]
+        masses = part["mass"][()]
+        diameters = part["diameter"][()]
+        bonds = f["connectivity/bonds"][()]
+        bond_types = f["parameters/fabmd/bond_type"][()]
+    return BeadModel(
+        positions=positions, diameters=diameters, masses=masses, atom_types=species,
+        fibre_ids=fibre_ids, bonds=bonds, bond_types=bond_types,
+        family_names=tuple(meta["families"]),
+        bond_type_table=[BondType(**bt) for bt in meta["bond_types"]],
+        fibre_yarn=meta["fibre_yarn"], yarns=[Yarn(**y) for y in meta["yarns"]],
+        box_lo=lo, box_hi=lo + lengths, periodic=tuple(meta.get("periodic", [False] * 3)),
+        angle_type_table=[AngleType(**a) for a in meta.get("angle_types", [])],
+        info=meta.get("info", {}))
+
+
+def trajectory_path(path: Path) -> Path:
+    """``path`` itself if it is a file, else ``path/trajectory.h5``."""
+    path = Path(path)
+    return path / TRAJECTORY_FILE if path.is_dir() else path
+
+
+def frame_count(path: Path) -> int:
+    with open_trajectory(trajectory_path(path)) as f:
+        return int(f["particles/all/position/value"].shape[0])

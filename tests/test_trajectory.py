@@ -1,0 +1,296 @@
+"""Trajectories: the LAMMPS block, trajectory.h5 (H5MD), fabmd.load, ParaView files, MPI."""
+
+import json
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+import pytest
+
+import fabmd
+import fabmd.results.universe
+from fabmd import analysis as A
+from fabmd.analysis.synthetic import woven_sheet
+from fabmd.engine import Engine
+from fabmd.errors import InputError, UnstableRun
+from fabmd.protocols.fibre_tension import FibreTension
+from fabmd.results.lammps_dump import iter_dump
+from fabmd.results.trajectory import (
+    FORMAT_VERSION,
+    TrajectoryFormatError,
+    open_trajectory,
+    read_model,
+    write_snapshot,
+)
+from fabmd.results.universe import data_file_bond_count
+from fabmd.scene import blocks
+from fabmd.scene.outputs import TrajectoryOutput
+
+from .conftest import clean_env, run_cli
+from .synthetic_runs import free_run
+
+TINY = ("--set", "length_m=2e-3", "--set", "max_strain=0.012", "--set", "speed_fraction=1e-3",
+        "--set", "trajectory_frames=6")
+
+
+def tiny_tension(**kwargs) -> FibreTension:
+    kwargs.setdefault("trajectory", TrajectoryOutput(frames=6))
+    return FibreTension(length_m=2e-3, max_strain=0.012, speed_fraction=1e-3, **kwargs)
+
+
+# -- command text (no LAMMPS) ---------------------------------------------------------------
+def test_trajectory_block_text():
+    text = blocks.trajectory(25, velocities=True)
+    assert ("dump            fabmd_trajectory all custom 25 trajectory.bin "
+            "id mol type xu yu zu vx vy vz") in text
+    assert "dump_modify     fabmd_trajectory sort id time yes" in text
+    assert "dump            fabmd_bonds all local 25 bonds.dump" in text
+    assert "{{" not in text and "# >>> fabmd trajectory" in text
+    plain = blocks.trajectory(25, bond_forces=False)
+    assert "vx" not in plain and "fabmd_bonds" not in plain
+    final = blocks.trajectory_final()
+    assert "dump_modify     fabmd_bonds every 1" in final and "run             0 post no" in final
+    assert "fabmd_bonds" not in blocks.trajectory_final(bond_forces=False)
+
+
+def test_trajectory_output_cadence_and_validation():
+    out = TrajectoryOutput(frames=50)
+    assert out.every(10_000) == 200 and out.every(10) == 1
+    assert TrajectoryOutput(every_steps=7).every(10_000) == 7
+    off = TrajectoryOutput(frames=0)
+    assert not off.enabled and "dump" not in off.commands(1000)
+    assert "dump" not in off.final_commands()
+    assert TrajectoryOutput(frames=3.0).frames == 3
+    with pytest.raises(InputError, match="trajectory.frames"):
+        TrajectoryOutput(frames=-1)
+    with pytest.raises(InputError, match="trajectory.every_steps"):
+        TrajectoryOutput(every_steps=0)
+    assert "fabmd_trajectory" in tiny_tension().input_text(tiny_tension().model())
+
+
+def test_import_fabmd_stays_light():
+    code = ("import sys, fabmd; print('MDAnalysis' in sys.modules, 'h5py' in sys.modules, "
+            "callable(fabmd.load))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=clean_env(), check=True)
+    assert out.stdout.split() == ["False", "False", "True"]
+
+
+# -- trajectory.h5 without LAMMPS -----------------------------------------------------------
+def test_snapshot_is_h5md_and_loads_with_yarns_as_segments(tmp_path):
+    model = woven_sheet(fibres=(3, 2))
+    path = write_snapshot(model, tmp_path / "sheet.h5", paraview_dir=tmp_path)
+    with open_trajectory(path) as f:
+        assert list(f["h5md"].attrs["version"]) == [1, 1]
+        assert f.attrs["fabmd_format_version"] == FORMAT_VERSION
+        assert f["particles/all/position/value"].attrs["unit"] == "m"
+        assert f["particles/all/position/value"].compression == "gzip"
+        assert list(f["particles/all/box"].attrs["boundary"]) == ["periodic", "periodic",
+                                                                  "none"]
+        assert f["connectivity/bonds"].shape == (model.n_bonds, 2)
+    back = read_model(path)
+    assert np.array_equal(back.positions, model.unwrapped_positions)
+    assert [y.name for y in back.yarns] == [y.name for y in model.yarns]
+
+    u = fabmd.load(path)
+    assert len(u.bonds) == model.n_bonds
+    assert u.atoms.n_residues == model.n_fibres and len(u.segments) == len(model.yarns)
+    warp = u.select_atoms("segid warp-*")
+    assert warp.n_atoms == len(model.beads_of_family("warp"))
+    assert u.select_atoms("resname weft").n_atoms == len(model.beads_of_family("weft"))
+    assert u.select_atoms("segid weft-1").n_atoms == model.n_beads // 4
+    assert u.select_atoms("type warp").n_atoms == warp.n_atoms
+    frame = A.FabricFrame.from_universe(u)
+    assert frame.closed.all()
+    assert A.crimp_by_family(frame)["weft"] == pytest.approx(
+        A.crimp_by_family(A.FabricFrame.from_model(model))["weft"], rel=1e-4)
+
+
+def test_readers_refuse_unknown_versions_and_formats(tmp_path):
+    path = write_snapshot(woven_sheet(), tmp_path / "t.h5")
+    newer = tmp_path / "newer.h5"
+    shutil.copy(path, newer)
+    with h5py.File(newer, "a") as f:
+        f.attrs["fabmd_format_version"] = FORMAT_VERSION + 1
+    with pytest.raises(TrajectoryFormatError, match=f"version {FORMAT_VERSION + 1}"):
+        fabmd.load(newer)
+    other = tmp_path / "other.h5"
+    with h5py.File(other, "w") as f:
+        f.create_group("particles")
+    with pytest.raises(TrajectoryFormatError, match="not a fabmd trajectory"):
+        fabmd.load(other)
+    with pytest.raises(InputError, match="no fabmd result"):
+        fabmd.load(tmp_path / "missing")
+
+
+def test_load_refuses_a_trajectory_of_another_model(tmp_path):
+    sheet = woven_sheet(fibres=(2, 1))
+    sheet.save(tmp_path)  # model.data of a 2x1-fibre sheet
+    write_snapshot(woven_sheet(fibres=(3, 1)), tmp_path / "trajectory.h5")
+    with pytest.raises(InputError, match="bonds loaded but"):
+        fabmd.load(tmp_path)
+    assert len(fabmd.load(tmp_path, check_bonds=False).bonds) > sheet.n_bonds
+
+
+# -- real runs ------------------------------------------------------------------------------
+@pytest.mark.lammps
+def test_fibre_tension_result_opens_in_mdanalysis_and_meshio(tmp_path):
+    import meshio
+
+    test = tiny_tension()
+    result = test.run(tmp_path / "ft", engine=Engine(progress=False))
+    run_dir = result.run_dir
+    assert result.summary["trajectory"] == "trajectory.h5"
+    for name in ("trajectory.h5", "trajectory.bin", "bonds.dump", "trajectory.pvd",
+                 "trajectory.json"):
+        assert (run_dir / name).exists(), name
+    assert not list(run_dir.glob("*.part"))
+
+    u = fabmd.load(run_dir)
+    assert len(u.bonds) == data_file_bond_count(run_dir / "model.data") == test.n_bonds
+    steps = np.array([ts.data["step"] for ts in u.trajectory])
+    assert steps[0] == 0 and steps[-1] == test.steps  # first and last step are frames
+    assert np.all(np.diff(steps) > 0) and len(steps) >= 6
+    assert u.trajectory.units["length"] == "m"
+
+    with open_trajectory(run_dir / "trajectory.h5") as f:
+        force = f["observables/bond_force/value"][-1]
+        last = f["particles/all/position/value"][-1]
+    bt = test.model().bond_type_table[0]
+    length = np.linalg.norm(np.diff(last, axis=0), axis=1)  # bond i joins beads i, i+1
+    # bond force: tension > 0, in the model's bond order, equal to 2K(r - r0)
+    assert np.allclose(force, 2 * bt.coefficient * (length - bt.rest_length_m), rtol=1e-6)
+    assert force.mean() == pytest.approx(result.curve["force_n"][-1], rel=0.02)
+    u.trajectory[-1]
+    assert fabmd.results.universe.bond_forces(u) == pytest.approx(force)
+
+    entries = (run_dir / "trajectory.pvd").read_text().count("<DataSet")
+    assert entries == len(steps)
+    vtu = sorted((run_dir / "paraview").glob("frame_*.vtu"))
+    assert len(vtu) == len(steps)
+    mesh = meshio.read(vtu[-1])
+    assert np.allclose(mesh.points, last, rtol=1e-6)  # single precision for viewing
+    assert mesh.cells_dict["line"].shape == (test.n_bonds, 2)
+    assert np.allclose(mesh.cell_data["bond_force_n"][0], force, rtol=1e-6)
+    assert set(mesh.point_data) >= {"yarn_id", "fibre_id", "family"}
+    report = json.loads((run_dir / "trajectory.json").read_text())
+    assert report["frames"] == len(steps) and report["trajectory_bytes"] > 0
+
+
+@pytest.mark.lammps
+def test_periodic_sheet_is_unwrapped_and_paraview_skips_closing_bonds(tmp_path):
+    import meshio
+
+    model = woven_sheet(fibres=(2, 1))
+    run_dir = free_run(model, tmp_path / "sheet", steps=300,
+                       trajectory=TrajectoryOutput(frames=3, velocities=True))
+    u = fabmd.load(run_dir)
+    rest = model.bond_type_table[0].rest_length_m
+    pairs = u.bonds.indices
+    closing = np.abs(pairs[:, 1] - pairs[:, 0]) > 1  # last bead back to the first
+    assert closing.sum() == model.n_fibres
+    k = 2 * model.bond_type_table[0].coefficient
+    for ts in u.trajectory:
+        lengths = u.bonds.values()  # unwrapped, no minimum image
+        assert lengths[~closing].max() < 1.05 * rest
+        assert lengths[closing].min() > 0.5 * model.box_hi[0]  # spans the box, unwrapped
+        assert u.bonds.values(pbc=True).max() < 1.05 * rest
+        assert np.abs(ts.velocities).max() > 0
+        # bond forces come in the order of u.bonds: 2K(r - r0) with r from double positions
+        exact = read_model(run_dir / "trajectory.h5", ts.frame)
+        d = exact.positions[pairs[:, 1]] - exact.positions[pairs[:, 0]]
+        d[:, :2] -= model.box_hi[:2] * np.round(d[:, :2] / model.box_hi[:2])
+        expected = k * (np.linalg.norm(d, axis=1) - rest)
+        force = fabmd.results.universe.bond_forces(u)
+        # (LAMMPS's r0 has 10 digits: an offset of ~k·r0·1e-10; a wrong order is ~1e-4 N off)
+        assert np.abs(force - expected).max() < k * rest * 1e-9
+        assert np.ptp(expected) > 1e-4  # the fibres do carry varying forces
+    mesh = meshio.read(sorted((run_dir / "paraview").glob("*.vtu"))[-1])
+    assert len(mesh.cells_dict["line"]) == model.n_bonds - model.n_fibres
+    assert "velocity_m_s" in mesh.point_data
+    u.trajectory[-1]
+    frame = A.FabricFrame.from_universe(u)
+    assert frame.time_s > 0 and frame.box_lo == pytest.approx(model.box_lo)
+    assert A.crimp_by_family(frame)["warp"] == pytest.approx(
+        A.crimp_by_family(A.FabricFrame.from_model(model))["warp"], abs=2e-3)
+
+
+@pytest.mark.lammps
+def test_no_trajectory_when_switched_off(tmp_path):
+    result = tiny_tension(trajectory=TrajectoryOutput(frames=0)).run(
+        tmp_path / "off", engine=Engine(progress=False))
+    assert result.summary["trajectory"] is None
+    assert not (result.run_dir / "trajectory.bin").exists()
+    assert "fabmd_trajectory" not in (result.run_dir / "in.fibre_tension").read_text()
+    u = fabmd.load(result.run_dir)  # final.data, one frame
+    assert u.trajectory.n_frames == 1 and len(u.bonds) == 40
+
+
+@pytest.mark.lammps
+def test_dump_cut_short_loses_only_its_last_frame(tmp_path):
+    run_dir = tiny_tension().run(tmp_path / "ft", engine=Engine(progress=False)).run_dir
+    whole = list(iter_dump(run_dir / "trajectory.bin"))
+    cut = tmp_path / "cut.bin"
+    cut.write_bytes((run_dir / "trajectory.bin").read_bytes()[:-100])
+    assert [fr.step for fr in iter_dump(cut)] == [fr.step for fr in whole[:-1]]
+    text = (run_dir / "bonds.dump").read_text()
+    (tmp_path / "cut.dump").write_text(text[: len(text) - 30])
+    assert len(list(iter_dump(tmp_path / "cut.dump"))) == len(whole) - 1
+
+
+@pytest.mark.lammps
+def test_frames_before_a_blow_up_are_kept(tmp_path, monkeypatch):
+    test = tiny_tension(trajectory=TrajectoryOutput(every_steps=5))
+    dt = test.time_step_s
+    original = FibreTension.input_text
+    monkeypatch.setattr(FibreTension, "input_text", lambda self, model: original(
+        self, model).replace(f"timestep        {dt:.10g}", f"timestep        {12 * dt:.10g}"))
+    with pytest.raises(UnstableRun):
+        test.run(tmp_path / "boom", engine=Engine(progress=False))
+    u = fabmd.load(tmp_path / "boom")
+    assert u.trajectory.n_frames >= 2  # the frames up to the blow-up, for a look in ParaView
+
+
+def _h5_contents(path) -> dict:
+    out = {}
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                out[name] = obj[()]
+        f.visititems(visit)
+        out["attrs"] = {k: v for k, v in f["parameters/fabmd"].attrs.items()}
+    return out
+
+
+def _assert_same_trajectory(a, b):
+    ca, cb = _h5_contents(a), _h5_contents(b)
+    assert ca.keys() == cb.keys()
+    assert ca.pop("attrs") == cb.pop("attrs")
+    for name, value in ca.items():
+        if value.dtype.kind == "f":
+            np.testing.assert_allclose(cb[name], value, rtol=1e-9, atol=1e-12, err_msg=name)
+        else:
+            assert np.array_equal(cb[name], value), name
+
+
+@pytest.mark.mpi
+def test_two_mpi_ranks_write_the_trajectory_once_and_alike(tmp_path, mpirun):
+    one = run_cli("validate", "fibre-tension", *TINY, "--out", str(tmp_path / "one"))
+    two = run_cli("validate", "fibre-tension", *TINY, "--out", str(tmp_path / "two"),
+                  mpi_ranks=2)
+    assert one.returncode == 0, one.stderr
+    assert two.returncode == 0, two.stderr
+    assert two.stdout.count("fibre-tension: PASSED") == 1  # rank 0 alone prints
+    for run in ("one", "two"):
+        files = sorted(p.name for p in (tmp_path / run).iterdir())
+        assert files.count("trajectory.h5") == 1 and not [f for f in files if ".part" in f]
+    _assert_same_trajectory(tmp_path / "one" / "trajectory.h5",
+                            tmp_path / "two" / "trajectory.h5")
+    # plain LAMMPS on 2 ranks (standalone back end) writes the same trajectory too
+    three = run_cli("validate", "fibre-tension", *TINY, "--out", str(tmp_path / "three"),
+                    "--backend", "standalone", "--np", "2")
+    assert three.returncode == 0, three.stderr
+    _assert_same_trajectory(tmp_path / "one" / "trajectory.h5",
+                            tmp_path / "three" / "trajectory.h5")
