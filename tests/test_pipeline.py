@@ -95,3 +95,31 @@ def test_resume_of_a_finished_pipeline_keeps_stages(tiny_scene, tmp_path):
     with pytest.raises(InputError, match="nothing to resume"):
         run_test(scene, "tension", tmp_path / "missing", engine=engine, resume=True)
     assert first["test_summary"]["steps"] > 0
+
+
+def test_presets_change_discretisation_and_speed_only():
+    import tomllib
+
+    from fabmd.presets import apply_preset
+
+    scene = parse_scene(tomllib.loads(TINY.replace("n_fibres = 1", "n_fibres = 7")))
+    fast = apply_preset(scene, "fast")
+    accurate = apply_preset(scene, "accurate")
+    assert fast.fabric.warp.n_fibres == 1 and accurate.fabric.warp.n_fibres == 19
+    assert fast.protocols["tension"]["speed_fraction"] == pytest.approx(2 * 2e-4)
+    assert accurate.protocols["tension"]["speed_fraction"] == pytest.approx(0.5 * 2e-4)
+    # the fabric itself is unchanged: same spacing and yarn size
+    assert fast.fabric.warp.spacing_m == scene.fabric.warp.spacing_m
+    assert fast.fabric.warp.width_m == scene.fabric.warp.width_m
+    assert fast.model().n_beads < scene.model().n_beads < accurate.model().n_beads
+    with pytest.raises(InputError, match="preset must be one of"):
+        apply_preset(scene, "sloppy")
+
+
+def test_demo_fast_runs_end_to_end(tmp_path):
+    out = run_cli("demo", "--fast", "--out", str(tmp_path / "demo"))
+    assert out.returncode == 0, out.stderr
+    assert "picture frame" in out.stdout and "locking angle" in out.stdout
+    for name in ("demo.png", "summary.json", "loose/preview.png", "crimp/sections.png",
+                 "tension/tension/curve.png", "picture_frame/picture_frame/curve.png"):
+        assert (tmp_path / "demo" / name).exists(), name

@@ -32,4 +32,4 @@ def test_pyproject_lists_every_package():
                  ["packages"])
     found = {".".join(p.parent.relative_to(root).parts)
              for p in (root / "fabmd").rglob("__init__.py")}
-    assert found | {"fabmd.lammps_templates"} == listed
+    assert found | {"fabmd.lammps_templates", "fabmd.examples"} == listed

@@ -41,3 +41,22 @@ def emit(obj: dict, as_json: bool, text: str) -> None:
         sys.stdout.write("\n")
     else:
         print(text)
+
+
+def add_preset_options(p: argparse.ArgumentParser) -> None:
+    """``--fast`` / ``--accurate``: the presets of :mod:`fabmd.presets`."""
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--fast", dest="preset", action="store_const", const="fast",
+                       help="one virtual fibre per yarn, twice the loading speed "
+                            "(see README: expected error)")
+    group.add_argument("--accurate", dest="preset", action="store_const", const="accurate",
+                       help="19 virtual fibres per yarn, half the loading speed")
+    p.set_defaults(preset="default")
+
+
+def scene_from(args):
+    """The scene file of ``args.scene`` with the chosen preset applied."""
+    from ..presets import apply_preset
+    from ..scenefile import load_scene
+
+    return apply_preset(load_scene(args.scene), args.preset)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import add_run_options, emit, engine_from
+from .common import add_preset_options, add_run_options, emit, engine_from, scene_from
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -14,14 +14,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--form", choices=["fabric", "cell"], default="fabric",
                    help="crimp the fabric as described (default) or its periodic unit cell")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_preset_options(p)
     add_run_options(p, out_required=True)
 
 
 def run(args) -> int:
     from ..pipeline import run_crimp
-    from ..scenefile import load_scene
-
-    scene = load_scene(args.scene)
+    scene = scene_from(args)
     result = run_crimp(scene, args.out, engine=engine_from(args), overwrite=args.overwrite,
                        form=args.form)
     s = result.summary

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import add_run_options, emit, engine_from
+from .common import add_preset_options, add_run_options, emit, engine_from, scene_from
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -22,6 +22,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run in --out from its last checkpoint")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_preset_options(p)
     add_run_options(p, out_required=True)
 
 
@@ -29,9 +30,7 @@ def run(args) -> int:
     import dataclasses
 
     from ..pipeline import run_test
-    from ..scenefile import load_scene
-
-    scene = load_scene(args.scene)
+    scene = scene_from(args)
     engine = dataclasses.replace(engine_from(args), checkpoint_every=args.checkpoint_every)
     summary = run_test(scene, args.name, args.out, engine=engine, overwrite=args.overwrite,
                        check_rate=args.check_rate, resume=args.resume, crimped=args.crimped)
