@@ -5,7 +5,7 @@ import pytest
 
 import fabmd
 from fabmd.engine import Engine
-from fabmd.errors import InputError
+from fabmd.errors import InputError, UnstableRun
 from fabmd.protocols.coupon import load_coupon
 from fabmd.protocols.tension import Tension
 from fabmd.results.universe import data_file_bond_count
@@ -76,3 +76,18 @@ def test_woven_coupon_is_soft_first_then_stiffens(woven_coupon, tmp_path):
 def test_clamps_that_leave_no_gauge_are_refused():
     with pytest.raises(InputError, match="clamp_length_m"):
         Tension(clamp_length_m=0.02).input_text(parallel_fibres())
+
+
+def test_a_blow_up_keeps_the_frames_up_to_it(tmp_path, monkeypatch):
+    """A driven test that fails still converts its trajectory (salvage), for a look."""
+    coupon = parallel_fibres(n=2)
+    test = Tension(max_elongation_pct=1.2, trajectory=TrajectoryOutput(every_steps=5))
+    runaway = coupon.bond_type_table[0].rest_length_m / test.time_step_s(coupon)  # m/s
+    original = Tension.input_text
+    # a kick far beyond the speed guard, for the test only (after the relaxation)
+    monkeypatch.setattr(Tension, "input_text", lambda self, model, extra="": original(
+        self, model, extra=f"velocity        free set NULL NULL {runaway:.6g} sum yes"))
+    with pytest.raises(UnstableRun):
+        test.run(coupon, tmp_path / "boom", engine=Engine(progress=False))
+    u = fabmd.load(tmp_path / "boom")
+    assert u.trajectory.n_frames >= 2 and u.trajectory[0].data["step"] == 0
