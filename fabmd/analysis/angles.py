@@ -132,18 +132,27 @@ def _cell_index(points: np.ndarray, xe: np.ndarray, ye: np.ndarray):
     return j[inside] * nx + i[inside], inside
 
 
+def _axial_means(vectors: np.ndarray, index: np.ndarray, n: int
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Doubled-angle mean in-plane direction [rad] of the vectors in each of ``n`` groups
+    (``index``: the group of each vector), weighted by in-plane length, and the summed
+    in-plane length; NaN for a group without length or whose directions cancel."""
+    v = np.asarray(vectors, float).reshape(-1, 3)
+    w = np.hypot(v[:, 0], v[:, 1])
+    theta = np.arctan2(v[:, 1], v[:, 0])
+    c = np.bincount(index, w * np.cos(2 * theta), n)
+    s = np.bincount(index, w * np.sin(2 * theta), n)
+    weight = np.bincount(index, w, n)
+    angle = 0.5 * np.arctan2(s, c)
+    angle[(weight <= 0) | (np.hypot(c, s) <= 1e-12 * weight)] = np.nan
+    return angle, weight
+
+
 def _mean_axial_angle(points, vectors, xe, ye) -> tuple[np.ndarray, np.ndarray]:
     """Doubled-angle mean direction [rad] and summed in-plane length per cell."""
     nx, ny = len(xe) - 1, len(ye) - 1
     flat, inside = _cell_index(points, xe, ye)
-    v = vectors[inside]
-    w = np.hypot(v[:, 0], v[:, 1])
-    theta = np.arctan2(v[:, 1], v[:, 0])
-    c = np.bincount(flat, w * np.cos(2 * theta), nx * ny)
-    s = np.bincount(flat, w * np.sin(2 * theta), nx * ny)
-    weight = np.bincount(flat, w, nx * ny)
-    angle = 0.5 * np.arctan2(s, c)
-    angle[weight <= 0] = np.nan
+    angle, weight = _axial_means(vectors[inside], flat, nx * ny)
     return angle.reshape(ny, nx), weight.reshape(ny, nx)
 
 
@@ -198,9 +207,8 @@ def axial_mean_deg(vectors: np.ndarray) -> float | None:
     """Mean in-plane axis of segment vectors [deg, in (−90°, 90°]]: the doubled-angle mean
     weighted by in-plane length; None without segments (or when they cancel)."""
     v = np.asarray(vectors, float).reshape(-1, 3)
-    length = np.hypot(v[:, 0], v[:, 1])
-    z = np.sum(length * np.exp(2j * np.arctan2(v[:, 1], v[:, 0])))
-    return float(np.degrees(0.5 * np.angle(z))) if abs(z) > 0 else None
+    angle, _ = _axial_means(v, np.zeros(len(v), np.int64), 1)
+    return None if np.isnan(angle[0]) else float(np.degrees(angle[0]))
 
 
 def family_axes_deg(frame: FabricFrame, mask: np.ndarray | None = None
