@@ -3,7 +3,8 @@
 :func:`build` maps a table onto a dataclass: unknown keys are refused naming the
 key and the allowed ones; values of fields whose names carry an SI unit suffix
 may be given as text with units ("120 mm", "2 mm/min"); sub-tables build nested
-settings (``[crimp.quasi_static]``, ``[tension.contact]``).
+settings (``[crimp.quasi_static]``, ``[tension.contact]``, ``[tension.trajectory]``),
+starting from the field's default (or the default passed in) for the keys they omit.
 """
 
 from __future__ import annotations
@@ -41,6 +42,12 @@ def _dataclass_of(hint) -> type | None:
     return None
 
 
+def _field_default(f: dataclasses.Field):
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    return None if f.default is dataclasses.MISSING else f.default
+
+
 def build(cls: type, table: dict | None, section: str, **defaults: Any):
     """An instance of dataclass ``cls`` from a scene-file table.
 
@@ -60,7 +67,9 @@ def build(cls: type, table: dict | None, section: str, **defaults: Any):
             raise InputError(f"[{section}] has no key {key!r} (allowed: {', '.join(fields)})")
         nested = _dataclass_of(hints.get(key))
         if nested is not None and isinstance(value, dict):
-            base = defaults.get(key)
+            # keys the sub-table leaves out keep the protocol's own default (e.g. the
+            # trajectory frames a test writes), not the nested class's
+            base = defaults.get(key, _field_default(fields[key]))
             inherited = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)} \
                 if dataclasses.is_dataclass(base) else {}
             merged = {**inherited, **value}

@@ -27,7 +27,7 @@ def test_trajectory_block_is_taken_out_and_put_in():
     assert "dump" not in plain and "run 0" not in plain and "run 100" in plain
     again = bench.with_trajectory(plain, out)
     assert again.index("fabmd_trajectory all custom 25") < again.index("run 100")
-    assert again.index("run 100") < again.index("run             0 post no")
+    assert again.index("run 100") < again.index("run             0 pre no post no")
     assert bench.with_trajectory(text, out) == text  # a block already there is kept
 
 

@@ -8,11 +8,14 @@ check therefore uses a net whose crossings are pinned and braced (a small shear
 stiffness) and whose fibres resist bending: the textbook trellis.
 """
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+import fabmd
+from fabmd.analysis import FabricFrame, zone_shear_angle_deg
 from fabmd.engine import Engine
 from fabmd.errors import InputError
 from fabmd.model.bead_model import AngleType, BeadModel, BondType, Yarn
@@ -23,7 +26,6 @@ from fabmd.protocols.bias_extension import (
     bias_displacement_m,
     bias_shear_angle_deg,
 )
-from fabmd.results.fibre_angles import shear_angle_deg
 
 from .fabrics import SOFT_GLASS, parallel_fibres
 
@@ -113,10 +115,15 @@ def test_fibre_angle_measure_reads_an_affine_trellis():
     f = np.array([[math.cos(phi) + math.sin(phi), 0], [0, math.cos(phi) - math.sin(phi)]])
     moved = net.positions.copy()
     moved[:, :2] = net.positions[:, :2] @ f.T
-    assert shear_angle_deg(net, net.positions, reference_deg=0.0) == pytest.approx(0, abs=1e-9)
-    assert shear_angle_deg(net, moved, reference_deg=0.0) == pytest.approx(24.0, abs=1e-6)
+    start = FabricFrame.from_model(net)
+    sheared = dataclasses.replace(start, positions=moved)
+    assert zone_shear_angle_deg(start, reference_deg=0.0) == pytest.approx(0, abs=1e-9)
+    assert zone_shear_angle_deg(sheared, reference_deg=0.0) == pytest.approx(24.0, abs=1e-6)
     # and a picture frame's shear seen from its pulled diagonal
-    assert shear_angle_deg(net, moved, reference_deg=90.0) == pytest.approx(-24.0, abs=1e-6)
+    assert zone_shear_angle_deg(sheared, reference_deg=90.0) == pytest.approx(-24.0, abs=1e-6)
+    # a zone: only segments with both beads in it count; an empty zone has no angle
+    nowhere = np.zeros(net.n_beads, bool)
+    assert zone_shear_angle_deg(sheared, nowhere, reference_deg=0.0) is None
 
 
 def test_short_or_unbiased_coupons_are_refused():
@@ -148,4 +155,8 @@ def test_braced_net_shears_in_the_centre_and_balances_energy(tmp_path):
     assert s["max_force_n"] > 0
     files = {p.name for p in result.run_dir.iterdir()}
     assert {"curve.csv", "curve.png", "shear_angle.png", "summary.json",
-            "trajectory.lammpstrj", "in.bias_extension"} <= files
+            "trajectory.h5", "trajectory.pvd", "in.bias_extension"} <= files
+    # the fibre angles were measured on every frame of trajectory.h5, the last one the end
+    u = fabmd.load(result.run_dir)
+    assert u.trajectory.n_frames == len(fibre["steps"])
+    assert fibre["steps"][-1] == s["steps"] == u.trajectory[-1].data["step"]

@@ -2,14 +2,20 @@
 
 import json
 
+import meshio
 import numpy as np
 import pytest
 
+import fabmd
 from fabmd.engine import Engine
 from fabmd.errors import InputError
 from fabmd.protocols.calibrate import CrimpTargets, calibrate
+from fabmd.protocols.coupon import Coupon
 from fabmd.protocols.crimp import Crimp, load_crimped
 from fabmd.results.measure import family_crimp, passed_through, thickness_m
+from fabmd.results.trajectory import read_model
+from fabmd.results.universe import data_file_bond_count
+from fabmd.scene.outputs import TrajectoryOutput
 
 from .fabrics import plain_weave_cell
 
@@ -61,6 +67,41 @@ def test_crimped_state_is_reusable_with_its_rest_lengths(crimped):
     assert ratio == pytest.approx(0.9)
     assert again.n_bonds == loose.n_bonds
     assert json.loads((result.run_dir / "crimped.json").read_text())["info"]["crimp"]
+
+
+def test_crimp_writes_its_trajectory_with_the_crimped_state_last(crimped):
+    loose, result = crimped
+    run_dir = result.run_dir
+    assert result.summary["trajectory"] == "trajectory.h5"
+    u = fabmd.load(run_dir)  # checks the bond count against model.data too
+    assert len(u.bonds) == data_file_bond_count(run_dir / "model.data") == loose.n_bonds
+    steps = [ts.data["step"] for ts in u.trajectory]
+    # (summary "steps" is the last history line; the run may go on to the next check)
+    assert steps[0] == 0 and steps[-1] >= result.summary["steps"] and len(steps) >= 3
+    assert np.all(np.diff(steps) > 0)
+    # the run stopped once quasi-static: the last frame is the crimped state
+    last = read_model(run_dir / "trajectory.h5")
+    np.testing.assert_allclose(last.positions, load_crimped(run_dir).unwrapped_positions,
+                               atol=1e-9 * float(loose.diameters.max()))
+    vtu = sorted((run_dir / "paraview").glob("frame_*.vtu"))
+    assert len(vtu) == len(steps)
+    mesh = meshio.read(vtu[-1])
+    assert len(mesh.points) == loose.n_beads
+    assert "bond_force_n" in mesh.cell_data and "yarn_id" in mesh.point_data
+
+
+def test_coupon_relaxation_can_write_a_trajectory(crimped, tmp_path):
+    """A relaxation ends with reset_timestep, which LAMMPS refuses while a dump is open:
+    the trajectory is closed right after its final frame."""
+    _, result = crimped
+    coupon = Coupon(length_m=6e-3, width_m=4e-3, trajectory=TrajectoryOutput(frames=4)).run(
+        result.model, tmp_path / "coupon", engine=Engine(progress=False))
+    assert coupon.summary["trajectory"] == "trajectory.h5"
+    u = fabmd.load(coupon.run_dir)
+    assert u.trajectory.n_frames >= 2 and u.trajectory[0].data["step"] == 0
+    np.testing.assert_allclose(read_model(coupon.run_dir / "trajectory.h5").positions,
+                               coupon.model.unwrapped_positions,
+                               atol=1e-9 * float(coupon.model.diameters.max()))
 
 
 def test_finite_piece_holds_fibre_ends(tmp_path):

@@ -4,6 +4,8 @@ plain-weave cell in tension and trellis shear (seconds)."""
 import numpy as np
 import pytest
 
+import fabmd
+from fabmd.analysis import FabricFrame, zone_shear_angle_deg
 from fabmd.engine import Engine
 from fabmd.errors import InputError
 from fabmd.model.bead_model import BeadModel, BondType, Yarn
@@ -11,6 +13,7 @@ from fabmd.model.beads import Discretisation, bead_parameters
 from fabmd.model.material import VirtualFibre
 from fabmd.protocols.crimp import Crimp
 from fabmd.protocols.periodic import PeriodicShear, PeriodicTension
+from fabmd.results.trajectory import read_tilt
 
 from .fabrics import SOFT_GLASS, parallel_fibres, plain_weave_cell
 
@@ -92,3 +95,17 @@ def test_woven_cell_in_trellis_shear(woven_cell, tmp_path):
     assert s["locking"]["found"] and s["locking_angle_deg"] < 45
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
+    # the trajectory of the sheared (triclinic) cell keeps its tilt: xy = b sin(gamma)
+    assert s["trajectory"] == "trajectory.h5"
+    b = woven_cell.box_hi[1] - woven_cell.box_lo[1]
+    xy = read_tilt(result.run_dir / "trajectory.h5")[0]
+    assert xy == pytest.approx(b * np.sin(np.radians(c["shear_angle_deg"][-1])), rel=1e-6)
+    u = fabmd.load(result.run_dir)
+    u.trajectory[-1]
+    assert u.dimensions[5] == pytest.approx(90 - c["shear_angle_deg"][-1], abs=1e-3)
+    # the fibres turn with the box: warp stays along x, weft turns to 90 - 45 deg; the
+    # closing segments of the fibres are taken across the tilted faces (a sheared cell's
+    # nearest image), so they count with their true direction
+    *_, final = FabricFrame.iter_trajectory(result.run_dir)
+    assert final.tilt[0] == pytest.approx(xy)
+    assert zone_shear_angle_deg(final, reference_deg=20.0) == pytest.approx(45, abs=3)

@@ -139,7 +139,7 @@ def test_picture_frame_is_quasi_static_and_balances_energy(frictional):
     assert s["max_kinetic_to_strain_energy"] < 0.05
     assert s["energy_balance"]["relative_error"] < 0.05
     files = {p.name for p in frictional.run_dir.iterdir()}
-    assert {"curve.csv", "curve.png", "summary.json", "trajectory.lammpstrj",
+    assert {"curve.csv", "curve.png", "summary.json", "trajectory.h5", "trajectory.pvd",
             "in.picture_frame"} <= files
     c = frictional.curve
     assert c["shear_angle_deg"][-1] == pytest.approx(60, abs=0.5)

@@ -1,5 +1,6 @@
 """Long runs survive interruption: a resumed run equals an uninterrupted one."""
 
+import h5py
 import numpy as np
 import pytest
 
@@ -49,6 +50,21 @@ def test_resume_equals_uninterrupted_run(tmp_path, woven_coupon):
     assert eb_resumed["contact_work_j"] == pytest.approx(
         eb_whole["contact_work_j"], abs=1e-4 * eb_whole["external_work_j"])
     assert eb_resumed["relative_error"] == pytest.approx(eb_whole["relative_error"], abs=1e-4)
+    # the trajectory goes on from the checkpoint (dumps cut back, then appended): every
+    # frame once, as in the whole run
+    assert resumed.summary["trajectory"] == "trajectory.h5"
+    with h5py.File(whole.run_dir / "trajectory.h5") as fw, \
+            h5py.File(resumed.run_dir / "trajectory.h5") as fr:
+        steps = fw["particles/all/position/step"][()]
+        np.testing.assert_array_equal(fr["particles/all/position/step"][()], steps)
+        assert len(steps) > 5 and np.all(np.diff(steps) > 0)
+        # equal to round-off grown by friction (as the forces above): a thousandth of d
+        np.testing.assert_allclose(fr["particles/all/position/value"][()],
+                                   fw["particles/all/position/value"][()],
+                                   atol=1e-3 * float(coupon.diameters.max()))
+        forces = fw["observables/bond_force/value"][()]
+        np.testing.assert_allclose(fr["observables/bond_force/value"][()], forces,
+                                   atol=1e-3 * np.nanmax(np.abs(forces)))
 
 
 def test_resume_without_checkpoint_is_a_clear_error(tmp_path):

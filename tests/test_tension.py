@@ -1,11 +1,15 @@
 """Uniaxial tension: closed form on straight fibres, and a woven coupon's curve shape."""
 
+import numpy as np
 import pytest
 
+import fabmd
 from fabmd.engine import Engine
-from fabmd.errors import InputError
+from fabmd.errors import InputError, UnstableRun
 from fabmd.protocols.coupon import load_coupon
 from fabmd.protocols.tension import Tension
+from fabmd.results.universe import data_file_bond_count
+from fabmd.scene.outputs import TrajectoryOutput
 
 from .fabrics import SOFT_GLASS, parallel_fibres
 
@@ -15,8 +19,8 @@ pytestmark = pytest.mark.lammps
 def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
     n = 4
     coupon = parallel_fibres(n=n)
-    result = Tension(max_elongation_pct=1.2).run(coupon, tmp_path / "t",
-                                                 engine=Engine(progress=False))
+    test = Tension(max_elongation_pct=1.2, trajectory=TrajectoryOutput(frames=7))
+    result = test.run(coupon, tmp_path / "t", engine=Engine(progress=False))
     s = result.summary
     ea = SOFT_GLASS.modulus_pa * 3.14159265 * 0.5e-3**2 / 4
     for strain in (0.5, 1.0):
@@ -24,6 +28,31 @@ def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
         assert measured == pytest.approx(n * ea * strain / 100, rel=0.02)
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
+    _assert_outputs_and_trajectory(result, test, coupon)
+
+
+def _data_steps(path) -> np.ndarray:
+    rows = [line.split() for line in path.read_text().splitlines()
+            if line.strip() and not line.startswith("#")]
+    return np.array([int(r[0]) for r in rows])
+
+
+def _assert_outputs_and_trajectory(result, test, coupon):
+    """The trajectory's final zero-step run adds no line to means.dat / curve.dat; the
+    frames fall on output steps, the last is the last step; fabmd.load opens them."""
+    run_dir, steps, every = result.run_dir, test.steps(coupon), test.every(coupon)
+    for name in ("curve.dat", "means.dat"):
+        written = _data_steps(run_dir / name)
+        assert np.all(np.diff(written) > 0), f"{name}: a step written twice"
+        assert written[-1] == steps
+    assert len(_data_steps(run_dir / "curve.dat")) == steps // every + 1
+    assert result.summary["trajectory"] == "trajectory.h5"
+    u = fabmd.load(run_dir)
+    frames = np.array([ts.data["step"] for ts in u.trajectory])
+    assert frames[0] == 0 and frames[-1] == steps and np.all(np.diff(frames) > 0)
+    assert np.all(frames % every == 0)  # on curve samples
+    assert 7 <= len(frames) <= 9
+    assert len(u.bonds) == data_file_bond_count(run_dir / "model.data")
 
 
 def test_coupon_is_relaxed_and_reusable(woven_coupon):
@@ -47,3 +76,18 @@ def test_woven_coupon_is_soft_first_then_stiffens(woven_coupon, tmp_path):
 def test_clamps_that_leave_no_gauge_are_refused():
     with pytest.raises(InputError, match="clamp_length_m"):
         Tension(clamp_length_m=0.02).input_text(parallel_fibres())
+
+
+def test_a_blow_up_keeps_the_frames_up_to_it(tmp_path, monkeypatch):
+    """A driven test that fails still converts its trajectory (salvage), for a look."""
+    coupon = parallel_fibres(n=2)
+    test = Tension(max_elongation_pct=1.2, trajectory=TrajectoryOutput(every_steps=5))
+    runaway = coupon.bond_type_table[0].rest_length_m / test.time_step_s(coupon)  # m/s
+    original = Tension.input_text
+    # a kick far beyond the speed guard, for the test only (after the relaxation)
+    monkeypatch.setattr(Tension, "input_text", lambda self, model, extra="": original(
+        self, model, extra=f"velocity        free set NULL NULL {runaway:.6g} sum yes"))
+    with pytest.raises(UnstableRun):
+        test.run(coupon, tmp_path / "boom", engine=Engine(progress=False))
+    u = fabmd.load(tmp_path / "boom")
+    assert u.trajectory.n_frames >= 2 and u.trajectory[0].data["step"] == 0

@@ -18,11 +18,15 @@ from fabmd.errors import InputError, UnstableRun
 from fabmd.protocols.fibre_tension import FibreTension
 from fabmd.results.lammps_dump import iter_dump
 from fabmd.results.trajectory import (
+    BASE_VERSION,
     FORMAT_VERSION,
+    Frame,
     TrajectoryFormatError,
     open_trajectory,
     read_model,
+    read_tilt,
     write_snapshot,
+    write_trajectory,
 )
 from fabmd.results.universe import data_file_bond_count
 from fabmd.scene import blocks
@@ -51,14 +55,21 @@ def test_trajectory_block_text():
     plain = blocks.trajectory(25, bond_forces=False)
     assert "vx" not in plain and "fabmd_bonds" not in plain
     final = blocks.trajectory_final()
-    assert "dump_modify     fabmd_bonds every 1" in final and "run             0 post no" in final
+    # "pre no": the zero-step run sets nothing up again, so fix print writes no line twice
+    assert "dump_modify     fabmd_bonds every 1" in final
+    assert "run             0 pre no post no" in final and "undump" not in final
     assert "fabmd_bonds" not in blocks.trajectory_final(bond_forces=False)
+    closed = blocks.trajectory_final(close=True)  # before a reset_timestep
+    assert "undump          fabmd_trajectory\nundump          fabmd_bonds" in closed
 
 
 def test_trajectory_output_cadence_and_validation():
     out = TrajectoryOutput(frames=50)
     assert out.every(10_000) == 200 and out.every(10) == 1
     assert TrajectoryOutput(every_steps=7).every(10_000) == 7
+    # on a driven test's output steps: rounded up to a multiple of its interval
+    assert out.every(10_000, multiple_of=30) == 210 and out.every(10, multiple_of=30) == 30
+    assert TrajectoryOutput(every_steps=7).every(10_000, multiple_of=30) == 7
     off = TrajectoryOutput(frames=0)
     assert not off.enabled and "dump" not in off.commands(1000)
     assert "dump" not in off.final_commands()
@@ -84,7 +95,8 @@ def test_snapshot_is_h5md_and_loads_with_yarns_as_segments(tmp_path):
     path = write_snapshot(model, tmp_path / "sheet.h5", paraview_dir=tmp_path)
     with open_trajectory(path) as f:
         assert list(f["h5md"].attrs["version"]) == [1, 1]
-        assert f.attrs["fabmd_format_version"] == FORMAT_VERSION
+        assert f.attrs["fabmd_format_version"] == BASE_VERSION  # no tilt: readable by v1
+        assert "box_tilt" not in f["observables"]
         assert f["particles/all/position/value"].attrs["unit"] == "m"
         assert f["particles/all/position/value"].compression == "gzip"
         assert list(f["particles/all/box"].attrs["boundary"]) == ["periodic", "periodic",
@@ -106,6 +118,28 @@ def test_snapshot_is_h5md_and_loads_with_yarns_as_segments(tmp_path):
     assert frame.closed.all()
     assert A.crimp_by_family(frame)["weft"] == pytest.approx(
         A.crimp_by_family(A.FabricFrame.from_model(model))["weft"], rel=1e-4)
+
+
+def test_a_sheared_cell_keeps_its_box_tilt(tmp_path):
+    model = woven_sheet(fibres=(3, 2))
+    lx, ly, lz = model.box_hi - model.box_lo
+    xy = 0.3 * ly
+    frames = [Frame(step=s, time=1e-6 * s, box_lo=model.box_lo, box_hi=model.box_hi,
+                    positions=model.unwrapped_positions, tilt=np.array([t, 0.0, 0.0]))
+              for s, t in ((0, 0.0), (10, xy))]
+    path = tmp_path / "trajectory.h5"
+    write_trajectory(path, model, frames)
+    with open_trajectory(path) as f:
+        assert f.attrs["fabmd_format_version"] == 2 == FORMAT_VERSION
+        assert f["observables/box_tilt/value"].attrs["unit"] == "m"
+    assert read_tilt(path, 0) == pytest.approx([0, 0, 0])
+    assert read_tilt(path) == pytest.approx([xy, 0, 0])
+    u = fabmd.load(path)
+    u.trajectory[1]
+    assert u.trajectory.ts.triclinic_dimensions[1] == pytest.approx([xy, ly, 0], rel=1e-6)
+    assert u.dimensions[5] == pytest.approx(np.degrees(np.arctan2(ly, xy)), rel=1e-6)
+    frame = A.FabricFrame.from_universe(u)
+    assert frame.box_lengths == pytest.approx([lx, ly, lz], rel=1e-6)  # the untilted cell
 
 
 def test_readers_refuse_unknown_versions_and_formats(tmp_path):
@@ -238,6 +272,35 @@ def test_dump_cut_short_loses_only_its_last_frame(tmp_path):
     text = (run_dir / "bonds.dump").read_text()
     (tmp_path / "cut.dump").write_text(text[: len(text) - 30])
     assert len(list(iter_dump(tmp_path / "cut.dump"))) == len(whole) - 1
+
+
+@pytest.mark.lammps
+def test_resume_cuts_the_dumps_back_and_joins_them_again(tmp_path):
+    """What the in-process engine does to the dumps around a resume (no LAMMPS needed
+    after the first run): frames before the checkpoint step are kept and set aside, the
+    resumed run writes the rest, and the parts join into the file of an unbroken run."""
+    from fabmd.engine.checkpoint import BEFORE_RESUME, cut_outputs, join_dump_parts
+    from fabmd.engine.script import logical_lines
+
+    run_dir = tiny_tension().run(tmp_path / "ft", engine=Engine(progress=False)).run_dir
+    commands = logical_lines((run_dir / "in.fibre_tension").read_text())
+    frames = list(iter_dump(run_dir / "trajectory.bin"))
+    cut_step = frames[3].step
+    whole = {name: (run_dir / name).read_bytes() for name in ("trajectory.bin", "bonds.dump")}
+    text_cut = whole["bonds.dump"].index(f"ITEM: TIMESTEP\n{cut_step}\n".encode())
+    later = {"trajectory.bin": whole["trajectory.bin"][frames[3].offset:],
+             "bonds.dump": whole["bonds.dump"][text_cut:]}
+    cut_outputs(run_dir, commands, cut_step)
+    for name in whole:
+        assert not (run_dir / name).exists()  # set aside: the resumed run writes it anew
+        before = run_dir / (name + BEFORE_RESUME)
+        assert before.read_bytes() == whole[name][: len(whole[name]) - len(later[name])]
+        (run_dir / name).write_bytes(later[name])  # what the resumed run writes
+    join_dump_parts(run_dir, commands)
+    for name in whole:
+        assert (run_dir / name).read_bytes() == whole[name]
+        assert not (run_dir / (name + BEFORE_RESUME)).exists()
+    assert [fr.step for fr in iter_dump(run_dir / "trajectory.bin")] == [f.step for f in frames]
 
 
 @pytest.mark.lammps

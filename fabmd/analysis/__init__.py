@@ -12,9 +12,22 @@ frame or an MDAnalysis universe::
     frame = analysis.FabricFrame.from_universe(u)          # the current frame
     analysis.crimp_by_family(frame)                        # {"warp": 0.012, ...}
     field = analysis.shear_angle_field(frame, cells=(8, 8))
+    centre = analysis.zone_mask(frame.positions, (0.01, 0.01), (0.002, 0.002))
+    analysis.zone_shear_angle_deg(frame, centre)          # one zone, signed by the test
 """
 
-from .angles import Field, in_plane_angle_field, segment_directions, shear_angle_field
+from .angles import (
+    Field,
+    axial_mean_deg,
+    family_axes_deg,
+    fibre_segments,
+    in_plane_angle_field,
+    segment_directions,
+    shear_angle_field,
+    shear_between_axes_deg,
+    zone_mask,
+    zone_shear_angle_deg,
+)
 from .frame import FabricFrame
 from .sections import CrossSection, convex_hull, cross_section
 from .yarns import (
@@ -33,6 +46,7 @@ __all__ = [
     "CrossSection",
     "FabricFrame",
     "Field",
+    "axial_mean_deg",
     "centreline",
     "convex_hull",
     "crimp",
@@ -40,11 +54,16 @@ __all__ = [
     "crimp_by_yarn",
     "cross_section",
     "curvature",
+    "family_axes_deg",
+    "fibre_segments",
     "in_plane_angle_field",
     "path_length",
     "resample",
     "segment_directions",
     "shear_angle_field",
+    "shear_between_axes_deg",
     "yarn_centreline",
     "yarn_centrelines",
+    "zone_mask",
+    "zone_shear_angle_deg",
 ]

@@ -8,6 +8,13 @@ the segment's in-plane length: θ̄ = ½·atan2(Σ w sin 2θ, Σ w cos 2θ) in (
 The shear angle of a cell is γ = 90° − (θ_weft − θ_warp), the difference taken
 in [0°, 180°): 0 for an unsheared fabric, positive when the weft has turned
 towards the warp.
+
+A *zone* (a set of beads, e.g. those that start in the central square of a
+picture-frame or bias-extension coupon: :func:`zone_mask`) has one mean axis per
+family (:func:`family_axes_deg`: the segments whose two beads are in the zone);
+:func:`zone_shear_angle_deg` is 90° minus the angle between two families' axes
+measured across the sector that holds the direction the test stretches, so its sign
+does not depend on which family runs at +45° in a bias coupon.
 """
 
 from __future__ import annotations
@@ -61,24 +68,39 @@ class Field:
         return float(v.mean()) if v.size else float("nan")
 
 
+def fibre_segments(frame: FabricFrame, family: str | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bead-to-bead segments of the fibres of one family (or all): (first bead, second
+    bead, vector [m]), with the segment that closes a periodic fibre (vector across the
+    box by the nearest image)."""
+    fibres = np.asarray([f for name in frame.yarns(family) for f in frame.fibres_of_yarn(name)],
+                        np.int64)
+    if not len(fibres):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3))
+    ids = frame.fibre_ids
+    chosen = np.zeros(frame.n_fibres + 1, bool)
+    chosen[fibres] = True
+    a = np.flatnonzero((ids[:-1] == ids[1:]) & chosen[ids[:-1]])
+    b = a + 1
+    vec = frame.positions[b] - frame.positions[a]
+    closed = fibres[frame.closed[fibres - 1]]
+    if len(closed):
+        first = np.asarray([frame.fibre_beads(f).start for f in closed], np.int64)
+        last = np.asarray([frame.fibre_beads(f).stop - 1 for f in closed], np.int64)
+        step = frame.minimum_image(frame.positions[first] - frame.positions[last])
+        a, b = np.concatenate([a, last]), np.concatenate([b, first])
+        vec = np.vstack([vec, step])
+    return a, b, vec
+
+
 def segment_directions(frame: FabricFrame, family: str | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Midpoints (wrapped into the box where periodic) and vectors of all fibre segments
     of one family (or all), including the segment that closes a periodic fibre [m]."""
-    fibres = [f for name in frame.yarns(family) for f in frame.fibres_of_yarn(name)]
-    mids, vecs = [], []
-    for f in fibres:
-        p = frame.fibre_path(f)
-        mids.append(0.5 * (p[1:] + p[:-1]))
-        vecs.append(np.diff(p, axis=0))
-    if not mids:
+    a, _, vec = fibre_segments(frame, family)
+    if not len(a):
         return np.zeros((0, 3)), np.zeros((0, 3))
-    mid = np.vstack(mids)
-    lengths = frame.box_lengths
-    for k in range(3):
-        if frame.periodic[k]:
-            mid[:, k] = frame.box_lo[k] + np.mod(mid[:, k] - frame.box_lo[k], lengths[k])
-    return mid, np.vstack(vecs)
+    return frame.wrap(frame.positions[a] + 0.5 * vec), vec
 
 
 def _grid(frame: FabricFrame, points: np.ndarray, cells, extent):
@@ -93,6 +115,9 @@ def _grid(frame: FabricFrame, points: np.ndarray, cells, extent):
         for k in range(2):
             if frame.periodic[k]:
                 lo[k], hi[k] = frame.box_lo[k], frame.box_hi[k]
+        if frame.periodic[0] and frame.tilt is not None:  # a sheared cell: its parallelogram
+            lo[0] += min(0.0, frame.tilt[0])
+            hi[0] += max(0.0, frame.tilt[0])
     else:
         (lo_x, hi_x), (lo_y, hi_y) = extent
         lo, hi = np.array([lo_x, lo_y], float), np.array([hi_x, hi_y], float)
@@ -107,18 +132,27 @@ def _cell_index(points: np.ndarray, xe: np.ndarray, ye: np.ndarray):
     return j[inside] * nx + i[inside], inside
 
 
+def _axial_means(vectors: np.ndarray, index: np.ndarray, n: int
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Doubled-angle mean in-plane direction [rad] of the vectors in each of ``n`` groups
+    (``index``: the group of each vector), weighted by in-plane length, and the summed
+    in-plane length; NaN for a group without length or whose directions cancel."""
+    v = np.asarray(vectors, float).reshape(-1, 3)
+    w = np.hypot(v[:, 0], v[:, 1])
+    theta = np.arctan2(v[:, 1], v[:, 0])
+    c = np.bincount(index, w * np.cos(2 * theta), n)
+    s = np.bincount(index, w * np.sin(2 * theta), n)
+    weight = np.bincount(index, w, n)
+    angle = 0.5 * np.arctan2(s, c)
+    angle[(weight <= 0) | (np.hypot(c, s) <= 1e-12 * weight)] = np.nan
+    return angle, weight
+
+
 def _mean_axial_angle(points, vectors, xe, ye) -> tuple[np.ndarray, np.ndarray]:
     """Doubled-angle mean direction [rad] and summed in-plane length per cell."""
     nx, ny = len(xe) - 1, len(ye) - 1
     flat, inside = _cell_index(points, xe, ye)
-    v = vectors[inside]
-    w = np.hypot(v[:, 0], v[:, 1])
-    theta = np.arctan2(v[:, 1], v[:, 0])
-    c = np.bincount(flat, w * np.cos(2 * theta), nx * ny)
-    s = np.bincount(flat, w * np.sin(2 * theta), nx * ny)
-    weight = np.bincount(flat, w, nx * ny)
-    angle = 0.5 * np.arctan2(s, c)
-    angle[weight <= 0] = np.nan
+    angle, weight = _axial_means(vectors[inside], flat, nx * ny)
     return angle.reshape(ny, nx), weight.reshape(ny, nx)
 
 
@@ -160,3 +194,61 @@ def shear_angle_field(frame: FabricFrame, warp: str = "warp", weft: str = "weft"
     gamma = np.degrees(0.5 * np.pi - between)
     return Field(xe, ye, gamma, "shear angle γ", "°",
                  extra={"warp_angle_deg": np.degrees(tw), "weft_angle_deg": np.degrees(tf)})
+
+
+# -- zones: one mean axis per family ------------------------------------------------------
+def zone_mask(positions: np.ndarray, centre, half_size) -> np.ndarray:
+    """Beads whose in-plane position lies in the rectangle ``centre ± half_size`` [m]."""
+    p = np.asarray(positions)[:, :2]
+    return np.all(np.abs(p - np.asarray(centre, float)) <= np.asarray(half_size, float), axis=1)
+
+
+def axial_mean_deg(vectors: np.ndarray) -> float | None:
+    """Mean in-plane axis of segment vectors [deg, in (−90°, 90°]]: the doubled-angle mean
+    weighted by in-plane length; None without segments (or when they cancel)."""
+    v = np.asarray(vectors, float).reshape(-1, 3)
+    angle, _ = _axial_means(v, np.zeros(len(v), np.int64), 1)
+    return None if np.isnan(angle[0]) else float(np.degrees(angle[0]))
+
+
+def family_axes_deg(frame: FabricFrame, mask: np.ndarray | None = None
+                    ) -> dict[str, float | None]:
+    """Mean in-plane axis of every family's fibre segments whose two beads are in ``mask``
+    (default: all beads) [deg, in (−90°, 90°]; None for a family without segments there]."""
+    mask = (np.ones(len(frame.positions), bool) if mask is None
+            else np.asarray(mask, bool).reshape(-1))
+    out: dict[str, float | None] = {}
+    for family in frame.families:
+        a, b, vec = fibre_segments(frame, family)
+        out[family] = axial_mean_deg(vec[mask[a] & mask[b]])
+    return out
+
+
+def shear_between_axes_deg(axis_a: float, axis_b: float, reference_deg: float = 45.0) -> float:
+    """90° minus the angle between two axes [deg] measured across the sector that holds
+    ``reference_deg``: positive when that sector closes, 0 for axes at right angles."""
+    a = (axis_a - reference_deg + 90.0) % 180.0 - 90.0  # in [-90, 90) about the reference
+    b = (axis_b - reference_deg + 90.0) % 180.0 - 90.0
+    sector = abs(a - b) if a * b <= 0 else 180.0 - abs(a - b)
+    return 90.0 - sector
+
+
+def zone_shear_angle_deg(frame: FabricFrame, mask: np.ndarray | None = None,
+                         families: tuple[str, str] = ("warp", "weft"),
+                         reference_deg: float = 45.0) -> float | None:
+    """Signed shear angle between two families' mean axes in a zone [deg].
+
+    Args:
+        mask: the zone's beads (default: all).
+        reference_deg: the direction the test stretches — the pulled diagonal of a
+            picture frame (45°), the load axis of a bias-extension test (0°); the angle
+            is measured across the sector that holds it (see :func:`shear_between_axes_deg`).
+
+    Returns:
+        None when a family has no segment in the zone.
+    """
+    axes = family_axes_deg(frame, mask)
+    a, b = axes.get(families[0]), axes.get(families[1])
+    if a is None or b is None:
+        return None
+    return shear_between_axes_deg(a, b, reference_deg)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,6 +33,10 @@ class FabricFrame:
         diameters: (N,) bead diameters [m] (optional).
         closed: (n_fibres,) bool, fibre closes across the box (default: none).
         time_s: time of the frame [s].
+        step: time step of the frame (None when unknown).
+        tilt: (xy, xz, yz) tilt factors of a triclinic box (a sheared periodic cell) [m];
+            the box vectors are then (lx, 0, 0), (xy, ly, 0), (xz, yz, lz) with
+            (lx, ly, lz) = box_hi − box_lo. None: an orthogonal box.
     """
 
     positions: np.ndarray
@@ -44,6 +50,8 @@ class FabricFrame:
     diameters: np.ndarray | None = None
     closed: np.ndarray | None = None
     time_s: float = 0.0
+    step: int | None = None
+    tilt: np.ndarray | None = None
     _starts: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -65,6 +73,8 @@ class FabricFrame:
         self._starts = np.searchsorted(self.fibre_ids, np.arange(1, n + 2))
         self.closed = (np.zeros(n, bool) if self.closed is None
                        else np.asarray(self.closed, bool).reshape(n))
+        if self.tilt is not None:
+            self.tilt = np.asarray(self.tilt, float).reshape(3)
         if self.diameters is not None:
             self.diameters = np.broadcast_to(np.asarray(self.diameters, float),
                                              (len(self.positions),)).copy()
@@ -83,12 +93,35 @@ class FabricFrame:
     @classmethod
     def from_trajectory(cls, path: Path, frame: int = -1) -> FabricFrame:
         """Frame ``frame`` of a ``trajectory.h5`` (or of a run folder's)."""
-        from ..results.trajectory import open_trajectory, read_model, trajectory_path
+        from ..results.trajectory import open_trajectory, read_model, read_tilt, trajectory_path
 
         path = trajectory_path(path)
         with open_trajectory(path) as f:
             time_s = float(f["particles/all/position/time"][frame])
-        return cls.from_model(read_model(path, frame), time_s=time_s)
+            step = int(f["particles/all/position/step"][frame])
+        return dataclasses.replace(cls.from_model(read_model(path, frame), time_s=time_s),
+                                   step=step, tilt=read_tilt(path, frame))
+
+    @classmethod
+    def iter_trajectory(cls, path: Path) -> Iterator[FabricFrame]:
+        """Every frame of a ``trajectory.h5`` (or of a run folder's), in order; the
+        identity is read once, then one frame's positions and box at a time."""
+        from ..results.trajectory import open_trajectory, trajectory_path
+
+        path = trajectory_path(path)
+        base = cls.from_trajectory(path, 0)
+        with open_trajectory(path) as f:
+            part = f["particles/all"]
+            position = part["position"]
+            edges = part["box/edges/value"]
+            offset = f["observables/box_offset/value"]
+            tilt = f["observables"].get("box_tilt")
+            for i in range(position["value"].shape[0]):
+                lo = np.asarray(offset[i], float)
+                yield dataclasses.replace(
+                    base, positions=position["value"][i], box_lo=lo, box_hi=lo + edges[i],
+                    time_s=float(position["time"][i]), step=int(position["step"][i]),
+                    tilt=None if tilt is None else tilt["value"][i])
 
     @classmethod
     def from_universe(cls, u) -> FabricFrame:
@@ -98,7 +131,10 @@ class FabricFrame:
         families = [str(r.resname) for r in (s.residues[0] for s in segments)]
         ts = u.trajectory.ts
         offset = ts.data.get("box_offset")
-        lengths = ts.dimensions[:3] if ts.dimensions is not None else np.ones(3)
+        # lx, ly, lz (of the untilted cell, for a sheared one) and the tilt
+        box = ts.triclinic_dimensions if ts.dimensions is not None else np.eye(3)
+        lengths = np.diag(box)
+        tilt = ts.data.get("box_tilt")
         lo = np.zeros(3) if offset is None else np.asarray(offset, float)
         resindex = u.atoms.resindices
         fibre_yarn = u.residues.segindices + 1
@@ -109,7 +145,9 @@ class FabricFrame:
                     periodic=tuple(info.get("periodic", (False, False, False))),
                     diameters=2.0 * u.atoms.radii if hasattr(u.atoms, "radii") else None,
                     closed=closed_fibres(resindex + 1, len(fibre_yarn), bonds),
-                    time_s=float(ts.time))
+                    time_s=float(ts.time),
+                    step=int(ts.data["step"]) if "step" in ts.data else None,
+                    tilt=None if tilt is None else np.asarray(tilt, float))
         return frame
 
     # -- queries --------------------------------------------------------------------------
@@ -125,6 +163,30 @@ class FabricFrame:
     @property
     def box_lengths(self) -> np.ndarray:
         return self.box_hi - self.box_lo
+
+    def box_vectors(self) -> np.ndarray:
+        """(3, 3) rows: the box's edge vectors a, b, c (tilted for a sheared cell) [m]."""
+        lx, ly, lz = self.box_lengths
+        xy, xz, yz = self.tilt if self.tilt is not None else (0.0, 0.0, 0.0)
+        return np.array([[lx, 0.0, 0.0], [xy, ly, 0.0], [xz, yz, lz]])
+
+    def minimum_image(self, d: np.ndarray) -> np.ndarray:
+        """Vectors ``d`` (n, 3) shifted by whole periods to their nearest image [m]."""
+        d = np.array(d, float).reshape(-1, 3)
+        vectors, lengths = self.box_vectors(), self.box_lengths
+        for k in (2, 1, 0):  # z, y, x: each vector of a triclinic box moves only the axes
+            if self.periodic[k]:  # at and before its own
+                d -= np.round(d[:, k] / lengths[k])[:, None] * vectors[k]
+        return d
+
+    def wrap(self, points: np.ndarray) -> np.ndarray:
+        """Points (n, 3) shifted by whole periods into the box (the tilted cell) [m]."""
+        p = np.array(points, float).reshape(-1, 3)
+        vectors, lengths = self.box_vectors(), self.box_lengths
+        for k in (2, 1, 0):
+            if self.periodic[k]:
+                p -= np.floor((p[:, k] - self.box_lo[k]) / lengths[k])[:, None] * vectors[k]
+        return p
 
     def yarn_id(self, yarn: str | int) -> int:
         """1-based id of a yarn given by name or id."""
@@ -153,11 +215,7 @@ class FabricFrame:
         shifted by one period, at the end (so the path spans exactly one period)."""
         path = self.positions[self.fibre_beads(fibre)]
         if close and self.closed[fibre - 1] and len(path) > 2:
-            step = path[0] - path[-1]
-            lengths = self.box_lengths
-            for k in range(3):
-                if self.periodic[k]:
-                    step[k] -= lengths[k] * np.round(step[k] / lengths[k])
+            step = self.minimum_image(path[0] - path[-1])[0]
             path = np.vstack([path, path[-1] + step])
         return path
 

@@ -11,8 +11,14 @@ settings (styles, coefficients, variables, computes, fixes, regions, outputs)
 are replayed; commands that *change the state* the restart file already holds
 (``read_data`` → ``read_restart``, ``group``, ``velocity``, ``reset_timestep``,
 finished ``run`` commands, ...) are skipped; output fixes append to their files,
-which are first cut back to the checkpoint; the interrupted ``run`` continues
-with the same ``start``/``stop`` so ramps pick up exactly where they were.
+which are first cut back to the checkpoint; the files of dumps still open at the
+checkpoint (the trajectory) are cut back to their frames before the checkpoint
+step and set aside (``<file>.before-resume``: LAMMPS cannot append to a binary
+dump), the resumed run writes them afresh from the checkpoint step (the frame at
+that step again if it falls on the dump's interval) and :func:`join_dump_parts`
+puts the two together when it ends, so every frame is there once; the interrupted
+``run`` continues with the same ``start``/``stop`` so ramps pick up exactly where
+they were.
 """
 
 from __future__ import annotations
@@ -36,6 +42,10 @@ STATE_COMMANDS = {
     "write_restart", "read_restart", "mass", "run", "minimize",
 }
 _FILE_KEYWORD = re.compile(r"\b(file)\s+(\S+)")
+#: dump styles whose files :func:`fabmd.results.lammps_dump.truncate_dump` can cut back
+_CUT_DUMP_STYLES = ("custom", "atom", "local")
+#: what a dump file written before the checkpoint is called while the resumed run writes
+BEFORE_RESUME = ".before-resume"
 
 
 @dataclass
@@ -74,6 +84,31 @@ def output_files(command: str) -> list[str]:
     return []
 
 
+def dump_file(command: str) -> tuple[str, str] | None:
+    """(dump id, file) of a ``dump ID group style N file ...`` command writing one file
+    that a resumed run can append to (text or binary custom/atom/local), else None."""
+    words = command.split()
+    if len(words) > 5 and words[0] == "dump" and words[3] in _CUT_DUMP_STYLES:
+        file = words[5].strip("\"'")
+        if "*" not in file and "%" not in file and not file.endswith(".gz"):
+            return words[1], file
+    return None
+
+
+def open_dumps(commands: list[str]) -> dict[str, str]:
+    """Dumps defined by ``commands`` and not undumped again: {id: file}."""
+    dumps: dict[str, str] = {}
+    for command in commands:
+        found = dump_file(command)
+        if found is not None:
+            dumps[found[0]] = found[1]
+            continue
+        words = command.split()
+        if len(words) == 2 and words[0] == "undump":
+            dumps.pop(words[1], None)
+    return dumps
+
+
 def resume_commands(commands: list[str], state: CheckpointState) -> list[str]:
     """The commands that bring a fresh LAMMPS to the checkpoint's state and settings.
 
@@ -95,7 +130,17 @@ def resume_commands(commands: list[str], state: CheckpointState) -> list[str]:
 
 def cut_outputs(run_dir: Path, commands: list[str], step: int) -> None:
     """Cut the output files of ``commands`` back to the lines up to ``step`` (a line the
-    resumed run prints again at ``step`` is dropped by the readers)."""
+    resumed run prints again at ``step`` is dropped by the readers), and the files of the
+    dumps still open back to their frames before ``step``, set aside for
+    :func:`join_dump_parts` (the resumed run writes the dump file anew)."""
+    from ..results.lammps_dump import truncate_dump
+
+    join_dump_parts(run_dir, commands)  # of a resumed run that was stopped hard
+    for name in open_dumps(commands).values():
+        path = Path(run_dir) / name
+        if path.exists():
+            truncate_dump(path, step)
+            os.replace(path, path.with_name(path.name + BEFORE_RESUME))
     for command in commands:
         for name in output_files(command):
             path = Path(run_dir) / name
@@ -113,3 +158,18 @@ def cut_outputs(run_dir: Path, commands: list[str], step: int) -> None:
                 except ValueError:
                     keep.append(line)
             path.write_text("\n".join(keep) + "\n")
+
+
+def join_dump_parts(run_dir: Path, commands: list[str]) -> None:
+    """Put the frames written before a resume in front of the resumed run's (binary and
+    text dumps alike: their frames are self-contained, so the files just concatenate)."""
+    for name in open_dumps(commands).values():
+        path = Path(run_dir) / name
+        before = path.with_name(path.name + BEFORE_RESUME)
+        if not before.exists():
+            continue
+        if path.exists():
+            with open(before, "ab") as out, open(path, "rb") as after:
+                while chunk := after.read(1 << 24):
+                    out.write(chunk)
+        os.replace(before, path)

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from . import mpi
-from .checkpoint import RESTART, CheckpointState, cut_outputs, resume_commands
+from .checkpoint import RESTART, CheckpointState, cut_outputs, join_dump_parts, resume_commands
 from .diagnosis import to_exception
 from .library import new_instance
 from .script import logical_lines, plain_run_steps, total_run_steps
@@ -136,6 +136,8 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                     progress(done, total)
         finally:
             lmp.close()
+            if state is not None and mpi.is_root():  # the dump frames from before the resume
+                join_dump_parts(run_dir, commands[: state.command_index])
     return done
 
 

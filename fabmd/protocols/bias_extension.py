@@ -11,7 +11,8 @@ the central zone is in pure shear (TEXTILE-PRIMER):
 The shear angle of the central zone is also measured from the fibres: the mean
 in-plane axes of the warp and the weft bonds of the beads that start in a central
 square (half-size ``central_zone_fraction`` × W) are taken from the trajectory
-frames (:mod:`fabmd.results.fibre_angles`), γ = 90° minus the angle between them.
+frames (``trajectory.h5``; :mod:`fabmd.results.fibre_angles`), γ = 90° minus the
+angle between them.
 Force is the mean of the two clamp reactions, against d.
 
 The test needs a fabric whose crossings carry normal force once it is cut free (yarn
@@ -30,13 +31,15 @@ from typing import ClassVar
 import numpy as np
 
 from .. import inputs
+from ..analysis import FabricFrame, family_axes_deg
 from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
-from ..results.fibre_angles import family_axes_deg
+from ..results.fibre_angles import fibre_shear_angles
 from ..scene.energy import ContactPower
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from .driven import (
     DrivenResult,
@@ -48,7 +51,6 @@ from .driven import (
     read_outputs,
     started_mask,
 )
-from .picture_frame import fibre_shear_angles
 from .tension import Tension
 
 PROTOCOL = "bias_extension"
@@ -83,8 +85,9 @@ class BiasExtension(DrivenTest):
         contact: fibre–fibre contact.
         time_step: time-step policy.
         samples: curve points.
-        trajectory_frames: frames written to ``trajectory.lammpstrj`` (the fibre angles
-            are measured on them).
+        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files);
+            the fibre angles are measured on them (``TrajectoryOutput(frames=0)``: none
+            written, none measured).
         report_angles_deg: central shear angles at which forces are reported.
         relax: stop criterion of the free relaxation before the test (clamps held).
     """
@@ -99,7 +102,7 @@ class BiasExtension(DrivenTest):
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 200
-    trajectory_frames: int = 20
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
@@ -122,7 +125,7 @@ class BiasExtension(DrivenTest):
         if self.damping_time_s is not None:
             inputs.positive("bias_extension.damping_time_s", self.damping_time_s)
         inputs.positive_int("bias_extension.samples", self.samples, minimum=10)
-        inputs.positive_int("bias_extension.trajectory_frames", self.trajectory_frames)
+        check_trajectory("bias_extension.trajectory", self.trajectory)
 
     # -- geometry ---------------------------------------------------------------------
     def width_m(self, model: BeadModel) -> float:
@@ -152,7 +155,7 @@ class BiasExtension(DrivenTest):
                        speed_fraction=self.speed_fraction, ramp_fraction=self.ramp_fraction,
                        damping_time_s=self.damping_time_s or self.duration_s(model) / 10,
                        contact=self.contact, time_step=self.time_step, samples=self.samples,
-                       relax=self.relax, trajectory_frames=self.trajectory_frames)
+                       relax=self.relax, trajectory=self.trajectory)
 
     def prepare(self, model: BeadModel) -> BeadModel:
         """Check the coupon: H ≥ 2 W, yarns at ±45° to x, shear angle reachable."""
@@ -162,7 +165,7 @@ class BiasExtension(DrivenTest):
                 f"bias_extension needs a free length H between the clamps of at least twice the "
                 f"width W; got H = {1e3 * h:.2f} mm, W = {1e3 * w:.2f} mm; cut a longer coupon "
                 f"(length >= 2 W + both clamps) or shorten clamp_length_m")
-        for fam, axis in family_axes_deg(model, model.positions).items():
+        for fam, axis in family_axes_deg(FabricFrame.from_model(model)).items():
             if axis is not None and abs(abs(axis) - 45.0) > 10.0:
                 raise InputError(f"bias_extension needs the yarns at +-45 deg to the load (x), "
                                  f"but the {fam} runs at {axis:.0f} deg; cut the coupon with "
@@ -204,8 +207,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
     p = model.positions
     centre = (p[:, :2].min(axis=0) + p[:, :2].max(axis=0)) / 2
     half = test.central_zone_fraction * w
-    steps, fibre_gamma = fibre_shear_angles(run_dir, model, centre, (half, half),
-                                            reference_deg=0.0)
+    steps, fibre_gamma = fibre_shear_angles(run_dir, centre, (half, half), reference_deg=0.0)
     kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)
     diff = np.abs(fibre_gamma - kinematic)
     summary = {

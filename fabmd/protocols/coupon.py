@@ -4,7 +4,7 @@ A crimped fabric holds its yarn tensions through its held ends or its periodic
 box; a coupon cut out of it springs back where fibres were cut. The coupon is
 therefore relaxed free (nothing held, damped until quasi-static) and saved as a
 reusable state — ``coupon.data`` + ``coupon.json`` — that the test protocols
-start from.
+start from (and, with ``trajectory`` frames, the relaxation as ``trajectory.h5``).
 """
 
 from __future__ import annotations
@@ -16,14 +16,16 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError
+from ..errors import InputError, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..model.transform import cut, tile
 from ..results.folder import write_json
 from ..results.measure import fabric_measures
+from ..results.trajectory import finalise, salvage
 from ..scene import blocks
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
 from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
@@ -45,6 +47,9 @@ class Coupon:
         relax: stop criterion of the free relaxation (None: no relaxation).
         contact: contact during the relaxation.
         time_step: time-step policy of the relaxation.
+        trajectory: trajectory frames of the relaxation (``trajectory.h5``, ParaView
+            files; spread over a quarter of ``relax.max_steps``, the relaxed state the last
+            frame); default none.
     """
 
     length_m: float
@@ -55,6 +60,7 @@ class Coupon:
     relax: QuasiStatic | None = field(default_factory=lambda: QuasiStatic(max_steps=100_000))
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=0))
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -64,6 +70,7 @@ class Coupon:
         if self.tile is not None:
             inputs.positive_int("coupon.tile[0]", self.tile[0])
             inputs.positive_int("coupon.tile[1]", self.tile[1])
+        check_trajectory("coupon.trajectory", self.trajectory)
 
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
@@ -105,7 +112,7 @@ class Coupon:
             "# a free coupon has nothing to stop rigid drift; local damping does not see it\n"
             "fix             no_drift all momentum 100 linear 1 1 1 angular",
             blocks.relax(model, dt, "held", "free", self.relax, ref,
-                         model.n_bonds * ref**2 / (2 * k)),
+                         model.n_bonds * ref**2 / (2 * k), trajectory=self.trajectory),
             blocks.guards(model, dt),
             render("finish", final_data=f"{COUPON}.data"),
         ])
@@ -123,14 +130,21 @@ class Coupon:
         text = self.input_text(geometry)
         run_dir = write_run_folder(out, PROTOCOL, geometry, text, {"coupon": scene_dict(self)},
                                    overwrite=overwrite)
-        run_folder(engine or Engine(), run_dir, PROTOCOL)
+        paraview = self.trajectory.paraview
+        try:
+            run_folder(engine or Engine(), run_dir, PROTOCOL)
+        except SimulationFailed:
+            salvage(run_dir, paraview=paraview, model=geometry)  # the frames up to the failure
+            raise
+        trajectory = finalise(run_dir, paraview=paraview, model=geometry)
         summary = None
         if mpi.is_root():
             relaxed = BeadModel.load(Path(run_dir) / f"{COUPON}.data", Path(run_dir) / "model.json")
             relaxed.save(run_dir, stem=COUPON)
             summary = {"relaxed": True, "cut": fabric_measures(geometry),
                        "relaxed_state": fabric_measures(relaxed),
-                       "overlap": overlap_summary(run_dir, self.contact)}
+                       "overlap": overlap_summary(run_dir, self.contact),
+                       "trajectory": trajectory.name if trajectory else None}
             write_json(Path(run_dir) / "summary.json", summary)
         summary = mpi.bcast_json(summary)
         return CouponResult(Path(run_dir), load_coupon(run_dir), summary)

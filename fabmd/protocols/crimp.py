@@ -12,8 +12,10 @@ steps.
 
 Outputs in the run folder: ``crimped.data`` + ``crimped.json`` (the as-woven
 bead model, reusable by the test protocols), ``history.dat``/``history.csv``,
-``summary.json`` (loose and crimped measures), ``history.png`` and
-``sections.png`` (top view and cross-sections along warp and weft).
+``summary.json`` (loose and crimped measures), ``history.png``,
+``sections.png`` (top view and cross-sections along warp and weft) and the
+trajectory of the ramp and the relaxation (``trajectory.h5``, ParaView files; the
+crimped state is its last frame).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError
+from ..errors import InputError, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
@@ -34,7 +36,9 @@ from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import fabric_measures
 from ..results.plots import plot_curves
 from ..results.preview import preview_png
+from ..results.trajectory import finalise, salvage
 from ..scene import blocks
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import fmt, render
 from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
@@ -59,6 +63,10 @@ class Crimp:
         time_step: time-step policy.
         ramp_transits: ramp duration in axial wave-transit times of the longest fibre.
         samples: history lines written.
+        trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
+            stops once quasi-static, so frames are spread over :meth:`expected_steps`
+            (the ramp and a quarter of the relaxation budget); the crimped state is
+            always the last frame. ``TrajectoryOutput(frames=0)`` writes none.
     """
 
     expansion: dict[str, float] = field(default_factory=dict)
@@ -69,6 +77,7 @@ class Crimp:
     time_step: TimeStep = field(default_factory=TimeStep)
     ramp_transits: float = 40.0
     samples: int = 200
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
     def __post_init__(self):
         if not isinstance(self.expansion, dict):
@@ -79,6 +88,7 @@ class Crimp:
                             high_open=True)
         inputs.positive("crimp.ramp_transits", self.ramp_transits)
         inputs.positive_int("crimp.samples", self.samples, minimum=2)
+        check_trajectory("crimp.trajectory", self.trajectory)
 
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
@@ -103,6 +113,11 @@ class Crimp:
         transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
         return max(1000, int(self.ramp_transits * transit / self.time_step_s(model)))
 
+    def expected_steps(self, model: BeadModel) -> int:
+        """Steps the run is planned for: the ramp and a quarter of the relaxation budget
+        (the relaxation stops once quasi-static); spaces history lines and frames."""
+        return self.ramp_steps(model) + self.quasi_static.max_steps // 4
+
     def reference_force_n(self, model: BeadModel) -> float:
         forces = [abs(self.expansion.get(bt.family, 0.0)) * 2 * bt.coefficient
                   * bt.rest_length_m for bt in model.bond_type_table]
@@ -126,7 +141,7 @@ class Crimp:
         dt = self.time_step_s(model)
         beads = model_bead_parameters(model)
         ramp = self.ramp_steps(model)
-        every = max(1, (ramp + self.quasi_static.max_steps // 4) // self.samples)
+        every = max(1, self.expected_steps(model) // self.samples)
         held = self.held_beads(model)
         if len(held):
             ids = [str(i + 1) for i in held]
@@ -169,7 +184,9 @@ class Crimp:
             blocks.overlap_monitor(model, self.contact, beads, every=every),
             blocks.guards(model, dt, max_rest_length_scale=max_scale).replace(
                 "thermo_modify   lost error lost/bond error", ""),
+            self.trajectory.commands(self.expected_steps(model)),
             text,
+            self.trajectory.final_commands(),
             "thermo_modify   lost error lost/bond error",
             render("finish", final_data=f"{CRIMPED}.data"),
         ])
@@ -184,12 +201,19 @@ class Crimp:
         run_dir = write_run_folder(out, PROTOCOL, model, text,
                                    {"crimp": scene_dict(self), "model": model.metadata()},
                                    overwrite=overwrite)
-        run = run_folder(engine, run_dir, PROTOCOL)
+        paraview = self.trajectory.paraview
+        try:
+            run = run_folder(engine, run_dir, PROTOCOL)
+        except SimulationFailed:
+            salvage(run_dir, paraview=paraview, model=model)  # the frames up to the failure
+            raise
+        trajectory = finalise(run_dir, paraview=paraview, model=model)
         summary = None
         crimped = None
         if mpi.is_root():
             crimped, summary = reduce(run_dir, model, self)
-            summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
+            summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
+                           trajectory=trajectory.name if trajectory else None)
             write_json(run_dir / "summary.json", summary)
         summary = mpi.bcast_json(summary)
         if crimped is None:

@@ -7,13 +7,16 @@ viscously (γ = m/τ) and writes, through ``lammps_templates/driven_outputs.lmp`
 
 * ``means.dat`` — forces and powers averaged over each output interval (exact
   integrals of the external and the damping power);
-* ``curve.dat`` — clock, boundary displacement(s) and energies at the output steps.
+* ``curve.dat`` — clock, boundary displacement(s) and energies at the output steps;
+* the trajectory (``trajectory.h5``, ParaView files; :mod:`fabmd.scene.outputs`)
+  with frames on output steps and the last step as the last frame.
 
 :class:`DrivenTest` is a mixin for the protocols' frozen dataclasses: it turns
 their ``speed_fraction``, ``ramp_fraction``, ``damping_time_s``, ``contact``,
-``time_step`` and ``samples`` fields plus the protocol's travel into the loading,
-the time step, the output interval and the step count, and its :meth:`run`
-writes the run folder, runs it with the contact-power monitor, reduces it, and
+``time_step``, ``samples`` and ``trajectory`` fields plus the protocol's travel into
+the loading, the time step, the output interval and the step count, and its :meth:`run`
+writes the run folder, runs it with the contact-power monitor, converts the
+trajectory (after a failed run too: the frames up to the failure), reduces it, and
 with ``check_rate`` reruns at half speed and reports how much the curve moved.
 :func:`read_outputs`, :func:`energy_columns`, :func:`kinetic_ratio` assemble the
 quasi-static evidence the same way for every protocol.
@@ -30,19 +33,18 @@ from typing import ClassVar
 import numpy as np
 
 from ..engine import Engine, mpi
+from ..errors import SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import model_bead_parameters
 from ..results.curves import curve_difference
 from ..results.folder import read_ave_time, read_print_file, write_csv, write_json
 from ..results.plots import plot_curves
+from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
 from .common import input_name, resume_folder, scene_dict, write_run_folder
-
-#: trajectory file every driven test writes (LAMMPS dump, sorted by id)
-TRAJECTORY = "trajectory.lammpstrj"
 
 
 @dataclass
@@ -140,10 +142,11 @@ class DrivenTest:
         tau = self.damping_time_s or self.duration_s(model) / 10
         return float(np.median(model.masses)) / tau
 
-    def trajectory_every(self, model: BeadModel, frames: int) -> int:
-        """Dump interval giving about ``frames`` trajectory frames (a multiple of every)."""
-        every = self.every(model)
-        return every * max(1, math.ceil(self.steps(model) / every / max(frames, 1)))
+    def trajectory_block(self, model: BeadModel) -> str:
+        """Outputs block of the trajectory (``self.trajectory``): about ``frames`` frames
+        over the test, on output steps (the interval a multiple of :meth:`every`). Put
+        ``self.trajectory.final_commands()`` after the run."""
+        return self.trajectory.commands(self.steps(model), multiple_of=self.every(model))
 
     def relax_block(self, model: BeadModel, held: str, free: str,
                     reference_force_n: float) -> str:
@@ -186,12 +189,19 @@ class DrivenTest:
             run_dir = write_run_folder(out, self.protocol, start, text,
                                        {self.protocol: scene_dict(self)}, overwrite=overwrite)
         monitor = monitor or self.make_monitor()
-        run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
-                         monitor=monitor, monitor_every=self.every(start), resume=resume)
+        paraview = self.trajectory.paraview
+        try:
+            run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
+                             monitor=monitor, monitor_every=self.every(start), resume=resume)
+        except SimulationFailed:
+            salvage(run_dir, paraview=paraview, model=start)  # the frames up to the failure
+            raise
+        trajectory = finalise(run_dir, paraview=paraview, model=start)
         result = None
         if mpi.is_root():
             result = self.reduce(run_dir, start, monitor)
-            result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
+            result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
+                                  trajectory=trajectory.name if trajectory else None)
         if check_rate:
             slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
             other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
@@ -302,8 +312,3 @@ def clamp_power(group: str = "clamps") -> tuple[str, str]:
     """(LAMMPS text, reference) of the power put in through the beads of ``group``."""
     return render("clamp_power", group=group), "c_p_ext"
 
-
-def trajectory_commands(every: int) -> str:
-    """A dump of every bead (id, fibre, type, position) for viewing and central-zone
-    measures."""
-    return render("trajectory", every=every, file=TRAJECTORY)

@@ -38,6 +38,7 @@ from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
 from ..scene import blocks
 from ..scene.energy import ContactPower
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
 from .common import DATA_FILE
@@ -50,7 +51,6 @@ from .driven import (
     kinetic_to_work_ratio,
     read_outputs,
     started_mask,
-    trajectory_commands,
 )
 from .picture_frame import interval_force
 
@@ -108,9 +108,10 @@ class _PeriodicCellTest(DrivenTest):
             blocks.contact(model, self.contact, beads),
             text,
             ContactPower.commands(),
-            trajectory_commands(self.trajectory_every(model, self.trajectory_frames)),
+            self.trajectory_block(model),
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
+            self.trajectory.final_commands(),
             render("finish", final_data="final.data"),
         ])
 
@@ -149,7 +150,8 @@ class PeriodicTension(_PeriodicCellTest):
         transverse_damping_fraction: Berendsen time constant over the test duration.
         speed_fraction: speed of the moving box face over the fibres' axial wave speed.
         ramp_fraction, damping_time_s, contact, time_step, samples, relax: as for tension.
-        trajectory_frames: frames written to ``trajectory.lammpstrj``.
+        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
+            ``TrajectoryOutput(frames=0)`` writes none).
         report_strains_pct: strains at which N_xx is reported.
     """
 
@@ -162,7 +164,7 @@ class PeriodicTension(_PeriodicCellTest):
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 100
-    trajectory_frames: int = 10
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
     report_strains_pct: tuple[float, ...] = (0.5, 1.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
@@ -184,7 +186,7 @@ class PeriodicTension(_PeriodicCellTest):
         if self.damping_time_s is not None:
             inputs.positive("periodic_tension.damping_time_s", self.damping_time_s)
         inputs.positive_int("periodic_tension.samples", self.samples, minimum=10)
-        inputs.positive_int("periodic_tension.trajectory_frames", self.trajectory_frames)
+        check_trajectory("periodic_tension.trajectory", self.trajectory)
 
     def travel_m(self, model: BeadModel) -> float:
         return self.cell(model)[0] * self.max_strain_pct / 100
@@ -271,7 +273,8 @@ class PeriodicShear(_PeriodicCellTest):
         speed_fraction: speed of the turning cell edge (b·γ̇) over the fibres' axial
             wave speed.
         ramp_fraction, damping_time_s, contact, time_step, samples, relax: as for tension.
-        trajectory_frames: frames written to ``trajectory.lammpstrj``.
+        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
+            the box tilt of the sheared cell is stored too).
         report_angles_deg: shear angles at which forces are reported.
     """
 
@@ -282,7 +285,7 @@ class PeriodicShear(_PeriodicCellTest):
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 100
-    trajectory_frames: int = 10
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
@@ -301,7 +304,7 @@ class PeriodicShear(_PeriodicCellTest):
         if self.damping_time_s is not None:
             inputs.positive("periodic_shear.damping_time_s", self.damping_time_s)
         inputs.positive_int("periodic_shear.samples", self.samples, minimum=10)
-        inputs.positive_int("periodic_shear.trajectory_frames", self.trajectory_frames)
+        check_trajectory("periodic_shear.trajectory", self.trajectory)
 
     def travel_m(self, model: BeadModel) -> float:
         """Arc the turning edge's end travels, b·γ [m]."""

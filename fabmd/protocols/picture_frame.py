@@ -32,19 +32,20 @@ from typing import ClassVar
 import numpy as np
 
 from .. import inputs
+from ..analysis import FabricFrame, family_axes_deg
 from ..errors import InputError
 from ..model.bead_model import BeadModel, BondType
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..results.curves import tangent_intersection, values_at
-from ..results.fibre_angles import family_axes_deg, read_dump, shear_angle_deg, zone_mask
+from ..results.fibre_angles import fibre_shear_angles
 from ..scene import blocks
 from ..scene.energy import ContactPower
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
 from .common import DATA_FILE
 from .driven import (
-    TRAJECTORY,
     DrivenResult,
     DrivenTest,
     clamp_power,
@@ -54,7 +55,6 @@ from .driven import (
     kinetic_to_work_ratio,
     read_outputs,
     started_mask,
-    trajectory_commands,
 )
 
 PROTOCOL = "picture_frame"
@@ -126,7 +126,9 @@ class PictureFrame(DrivenTest):
         contact: fibre–fibre contact.
         time_step: time-step policy.
         samples: curve points.
-        trajectory_frames: frames written to ``trajectory.lammpstrj``.
+        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files);
+            the fibre shear angle of the central zone is measured on them
+            (``TrajectoryOutput(frames=0)``: none written, none measured).
         report_angles_deg: shear angles at which forces are reported.
         relax: stop criterion of the free relaxation before the test (clamps held).
     """
@@ -143,7 +145,7 @@ class PictureFrame(DrivenTest):
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 200
-    trajectory_frames: int = 20
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
@@ -171,7 +173,7 @@ class PictureFrame(DrivenTest):
         if self.damping_time_s is not None:
             inputs.positive("picture_frame.damping_time_s", self.damping_time_s)
         inputs.positive_int("picture_frame.samples", self.samples, minimum=10)
-        inputs.positive_int("picture_frame.trajectory_frames", self.trajectory_frames)
+        check_trajectory("picture_frame.trajectory", self.trajectory)
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
 
@@ -229,7 +231,7 @@ class PictureFrame(DrivenTest):
 
     def check_orientation(self, model: BeadModel) -> None:
         """Warp must run along x and weft along y (within 15°)."""
-        axes = family_axes_deg(model, model.positions)
+        axes = family_axes_deg(FabricFrame.from_model(model))
         for fam, want in (("warp", 0.0), ("weft", 90.0)):
             got = axes.get(fam)
             if got is not None and abs(((got - want) + 90) % 180 - 90) > 15:
@@ -315,9 +317,10 @@ class PictureFrame(DrivenTest):
             blocks.contact(model, self.contact, beads),
             text,
             ContactPower.commands(),
-            trajectory_commands(self.trajectory_every(model, self.trajectory_frames)),
+            self.trajectory_block(model),
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
+            self.trajectory.final_commands(),
             render("finish", final_data="final.data"),
         ])
 
@@ -335,28 +338,6 @@ def interval_force(displacement: np.ndarray, work: np.ndarray) -> np.ndarray:
     for k in range(len(dd)):
         force[k + 1] = dw[k] / dd[k] if abs(dd[k]) > 0 else force[k]
     return force
-
-
-def fibre_shear_angles(run_dir: Path, model: BeadModel, centre, half_size,
-                       reference_deg: float = 45.0) -> tuple[np.ndarray, np.ndarray]:
-    """(steps, shear angle between warp and weft in the central zone [deg]) per trajectory
-    frame; ``reference_deg``: the direction the test stretches (see
-    :func:`fabmd.results.fibre_angles.shear_angle_deg`)."""
-    path = Path(run_dir) / TRAJECTORY
-    if not path.exists():
-        return np.zeros(0), np.zeros(0)
-    steps, angles = [], []
-    first_zone = None
-    for step, ids, pos in read_dump(path):
-        if len(ids) != model.n_beads:
-            continue
-        if first_zone is None:  # the zone follows the beads that were in it at the start
-            first_zone = zone_mask(pos, centre, half_size)
-        gamma = shear_angle_deg(model, pos, first_zone, reference_deg=reference_deg)
-        if gamma is not None:
-            steps.append(step)
-            angles.append(gamma)
-    return np.asarray(steps), np.asarray(angles)
 
 
 def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
@@ -378,7 +359,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     valid = gamma > 0.02 * gamma.max()  # past the first, noisy intervals of the smooth start
     lock = tangent_intersection(gamma[valid], fnorm[valid])
     initial = tangent_intersection(np.radians(gamma[valid]), fnorm[valid])["initial_slope"]
-    steps, fibre_gamma = fibre_shear_angles(run_dir, model, g.centre,
+    steps, fibre_gamma = fibre_shear_angles(run_dir, g.centre,
                                             (g.free_side_m / 4, g.free_side_m / 4))
     kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)
     summary = {

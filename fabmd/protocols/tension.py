@@ -25,6 +25,7 @@ from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
 from ..scene import blocks
 from ..scene.energy import ContactPower
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
 from .common import DATA_FILE
@@ -38,7 +39,6 @@ from .driven import (
     kinetic_ratio,
     read_outputs,
     started_mask,
-    trajectory_commands,
 )
 
 PROTOCOL = "tension"
@@ -59,7 +59,9 @@ class Tension(DrivenTest):
         time_step: time-step policy.
         samples: curve points.
         report_elongations_pct: elongations at which forces are reported.
-        trajectory_frames: frames written to ``trajectory.lammpstrj`` (0: none).
+        relax: stop criterion of the free relaxation before the test (clamps held).
+        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
+            ``TrajectoryOutput(frames=0)`` writes none).
     """
 
     max_elongation_pct: float = 3.0
@@ -72,7 +74,7 @@ class Tension(DrivenTest):
     samples: int = 200
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
-    trajectory_frames: int = 20
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
     protocol: ClassVar[str] = PROTOCOL
     rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
@@ -88,7 +90,7 @@ class Tension(DrivenTest):
         if self.damping_time_s is not None:
             inputs.positive("tension.damping_time_s", self.damping_time_s)
         inputs.positive_int("tension.samples", self.samples, minimum=10)
-        inputs.positive_int("tension.trajectory_frames", self.trajectory_frames, minimum=0)
+        check_trajectory("tension.trajectory", self.trajectory)
 
     # -- geometry of the coupon --------------------------------------------------------
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
@@ -138,11 +140,11 @@ class Tension(DrivenTest):
             blocks.contact(model, self.contact, beads),
             text,
             ContactPower.commands(),
-            trajectory_commands(self.trajectory_every(model, self.trajectory_frames))
-            if self.trajectory_frames else "# no trajectory",
+            self.trajectory_block(model),
             extra,
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
+            self.trajectory.final_commands(),
             render("finish", final_data="final.data"),
         ])
 

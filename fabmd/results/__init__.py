@@ -5,5 +5,6 @@
 * :mod:`.trajectory` — ``trajectory.h5`` (H5MD) from the LAMMPS dumps (``finalise``);
 * :mod:`.paraview` — ``trajectory.pvd`` + ``paraview/frame_*.vtu``;
 * :mod:`.universe` — :func:`fabmd.load`, results as MDAnalysis universes;
-* :mod:`.lammps_dump` — readers of LAMMPS binary and text dumps.
+* :mod:`.lammps_dump` — readers of LAMMPS binary and text dumps (and cutting them back);
+* :mod:`.fibre_angles` — the fibre shear angle of a zone, frame by frame.
 """

@@ -7,11 +7,17 @@
 * ``bonds.dump`` — ``dump local`` text with ``ITEM: BONDS`` sections.
 
 Both are read frame by frame, so a long trajectory never sits in memory whole.
+Triclinic boxes (a sheared periodic cell) are read as the box itself (``box_lo``,
+``box_hi`` of the untilted cell, as in a data file) and its ``tilt`` (xy, xz, yz);
+LAMMPS writes the bounding box of the tilted cell, which is converted back.
+:func:`truncate_dump` cuts a dump back to the frames before a step (a run resumed
+from a checkpoint appends to it).
 """
 
 from __future__ import annotations
 
 import itertools
+import re
 import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -38,6 +44,9 @@ class DumpFrame:
     boundary: str
     columns: list[str]
     data: np.ndarray
+    tilt: np.ndarray | None = None  # xy, xz, yz of a triclinic box [m]
+    offset: int = -1  # where the frame starts and ends in its file (bytes; binary dumps)
+    end_offset: int = -1
 
     def column(self, name: str) -> np.ndarray:
         try:
@@ -55,6 +64,17 @@ def _read(f, fmt: str):
     return struct.unpack(fmt, raw)
 
 
+def box_from_bounds(lo_bound, hi_bound, tilt) -> tuple[np.ndarray, np.ndarray]:
+    """The box (lo, hi) of a triclinic cell from the bounding box LAMMPS dumps write."""
+    lo, hi = np.array(lo_bound, float), np.array(hi_bound, float)
+    xy, xz, yz = (float(t) for t in tilt)
+    lo[0] -= min(0.0, xy, xz, xy + xz)
+    hi[0] -= max(0.0, xy, xz, xy + xz)
+    lo[1] -= min(0.0, yz)
+    hi[1] -= max(0.0, yz)
+    return lo, hi
+
+
 def iter_binary_dump(path: Path) -> Iterator[DumpFrame]:
     """Frames of a binary ``dump custom`` file (LAMMPS 2021 and later layout).
 
@@ -65,6 +85,7 @@ def iter_binary_dump(path: Path) -> Iterator[DumpFrame]:
     columns: list[str] = []
     with open(path, "rb") as f:
         while True:
+            offset = f.tell()
             try:
                 (step,) = _read(f, "<q")
                 magic = revision = None
@@ -78,8 +99,7 @@ def iter_binary_dump(path: Path) -> Iterator[DumpFrame]:
                 (triclinic,) = _read(f, "<i")
                 bounds = _read(f, "<6i")
                 box = _read(f, "<6d")
-                if triclinic:
-                    raise InputError(f"{path}: triclinic boxes are not supported")
+                tilt = np.array(_read(f, "<3d")) if triclinic else None
                 (size_one,) = _read(f, "<i")
                 time = None
                 if magic is not None and revision > 1:
@@ -106,10 +126,13 @@ def iter_binary_dump(path: Path) -> Iterator[DumpFrame]:
                                  f"expected {natoms} x {size_one}")
             boundary = " ".join(_BOUNDARY.get(bounds[2 * k], "?") + _BOUNDARY.get(
                 bounds[2 * k + 1], "?") for k in range(3))
-            yield DumpFrame(step=int(step), time=time, box_lo=np.array(box[0::2]),
-                            box_hi=np.array(box[1::2]), boundary=boundary,
+            lo, hi = np.array(box[0::2]), np.array(box[1::2])
+            if tilt is not None:
+                lo, hi = box_from_bounds(lo, hi, tilt)
+            yield DumpFrame(step=int(step), time=time, box_lo=lo, box_hi=hi, boundary=boundary,
                             columns=list(columns) or [f"c{i}" for i in range(size_one)],
-                            data=data.reshape(natoms, size_one))
+                            data=data.reshape(natoms, size_one), tilt=tilt, offset=offset,
+                            end_offset=f.tell())
 
 
 def iter_text_dump(path: Path) -> Iterator[DumpFrame]:
@@ -123,6 +146,7 @@ def iter_text_dump(path: Path) -> Iterator[DumpFrame]:
             lo = np.zeros(3)
             hi = np.zeros(3)
             boundary = ""
+            tilt = None
             columns: list[str] = []
             line = f.readline()
             if not line:
@@ -136,9 +160,17 @@ def iter_text_dump(path: Path) -> Iterator[DumpFrame]:
                 elif item.startswith("ITEM: NUMBER OF"):
                     count = int(f.readline())
                 elif item.startswith("ITEM: BOX BOUNDS"):
-                    boundary = " ".join(item.split()[3:])
+                    words = item.split()[3:]
+                    triclinic = words[:3] == ["xy", "xz", "yz"]
+                    boundary = " ".join(words[3:] if triclinic else words)
+                    tilt = np.zeros(3) if triclinic else None
                     for k in range(3):
-                        lo[k], hi[k] = (float(v) for v in f.readline().split()[:2])
+                        values = [float(v) for v in f.readline().split()]
+                        lo[k], hi[k] = values[:2]
+                        if triclinic:
+                            tilt[k] = values[2]
+                    if triclinic:
+                        lo, hi = box_from_bounds(lo, hi, tilt)
                 elif item.startswith("ITEM: ") and step is not None and count is not None:
                     columns = item.split()[2:]
                     break
@@ -153,10 +185,40 @@ def iter_text_dump(path: Path) -> Iterator[DumpFrame]:
                 return  # cut short
             yield DumpFrame(step=step, time=time, box_lo=lo.copy(), box_hi=hi.copy(),
                             boundary=boundary, columns=columns,
-                            data=values.reshape(count, len(columns)))
+                            data=values.reshape(count, len(columns)), tilt=tilt)
 
 
 def iter_dump(path: Path) -> Iterator[DumpFrame]:
     """Frames of a binary (``.bin``) or text dump."""
     path = Path(path)
     return iter_binary_dump(path) if path.suffix == ".bin" else iter_text_dump(path)
+
+
+def truncate_dump(path: Path, step: int) -> int:
+    """Cut a dump back to its frames before ``step`` (a frame cut short at its end goes
+    too); returns the frames kept. A missing file is left alone (0)."""
+    path = Path(path)
+    if not path.exists():
+        return 0
+    kept, end = 0, 0
+    if path.suffix == ".bin":
+        for frame in iter_binary_dump(path):
+            if frame.step >= step:
+                break
+            kept, end = kept + 1, frame.end_offset
+    else:
+        data = path.read_bytes()
+        starts = [m.start() for m in re.finditer(rb"(?m)^ITEM: TIMESTEP\n", data)]
+        for k, start in enumerate(starts):
+            words = data[start:start + 64].split(b"\n")
+            try:
+                frame_step = int(words[1])
+            except (IndexError, ValueError):
+                break
+            last = k + 1 == len(starts)
+            if frame_step >= step or (last and not data.endswith(b"\n")):
+                break
+            kept, end = kept + 1, len(data) if last else starts[k + 1]
+    with open(path, "r+b") as f:
+        f.truncate(end)
+    return kept

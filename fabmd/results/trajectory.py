@@ -10,6 +10,7 @@ dumps stay beside them for OVITO.
 Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)::
 
     /                      attrs fabmd_format="fabmd-trajectory", fabmd_format_version=1
+                           (2 when the file has box_tilt)
     /h5md                  attrs version=[1, 1]; author/, creator/ (name, version)
     /particles/all/
         box/               attrs dimension=3, boundary=["periodic"|"none"] x 3
@@ -24,12 +25,17 @@ Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)
     /connectivity/bonds    [nb, 2] 0-based bead indices; attr particles_group
     /observables/
         box_offset/        step, time, value [nf, 3] m (lower box corner)
+        box_tilt/          (version 2, a triclinic box: a sheared periodic cell) value
+                           [nf, 3] m, the tilt factors xy, xz, yz as LAMMPS has them;
+                           edges are then the lengths lx, ly, lz of the untilted cell
+                           (the box vectors are (lx,0,0), (xy,ly,0), (xz,yz,lz))
         bond_force/        (optional) value [nf, nb] N, axial force, > 0 in tension
     /parameters/fabmd      attrs family_names, yarn_names, yarn_families, model_json;
                            datasets fibre_yarn [n_fibres], bond_type [nb]
 
 Every ``step`` dataset is one dataset hard-linked into each element. Readers
-(:func:`open_trajectory`) refuse files of an unknown format or a newer version.
+(:func:`open_trajectory`) refuse files of an unknown format or a newer version; a
+file without a tilted box stays version 1, so that an older fabmd reads it.
 MDAnalysis's own H5MD reader does not know the unit ``m``: open the file with
 :func:`fabmd.load`, whose reader keeps SI values as they are.
 """
@@ -51,7 +57,10 @@ from ..scene.outputs import BOND_DUMP_FILE, DUMP_FILE
 from .paraview import PARAVIEW_DIR, PVD_FILE  # noqa: F401 - file names of a run folder
 
 FORMAT = "fabmd-trajectory"
-FORMAT_VERSION = 1
+#: the newest format version this fabmd writes and reads (2: box_tilt may be present)
+FORMAT_VERSION = 2
+#: the version of a file without box_tilt
+BASE_VERSION = 1
 H5MD_VERSION = (1, 1)
 
 TRAJECTORY_FILE = "trajectory.h5"
@@ -94,7 +103,7 @@ class TrajectoryWriter:
         self.n_frames = 0
         f = self.file = h5py.File(self.partial, "w")
         f.attrs["fabmd_format"] = FORMAT
-        f.attrs["fabmd_format_version"] = FORMAT_VERSION
+        f.attrs["fabmd_format_version"] = BASE_VERSION
         h5md = f.create_group("h5md")
         h5md.attrs["version"] = np.array(H5MD_VERSION, dtype=np.int32)
         h5md.create_group("author").attrs["name"] = "fabmd"
@@ -128,8 +137,9 @@ class TrajectoryWriter:
         bonds = f.create_group("connectivity").create_dataset(
             "bonds", data=np.asarray(model.bonds, np.int32).reshape(-1, 2))
         bonds.attrs["particles_group"] = part.ref
-        obs = f.create_group("observables")
+        obs = self.observables = f.create_group("observables")
         self.offset = self._element(obs, "box_offset", (3,), "m", compress=False)
+        self.tilt = None  # created by the first frame of a tilted box
         if self.bond_data:
             self.bond_force = self._element(obs, "bond_force", (nb,), "N")
             self.bond_force.attrs["sign"] = "positive in tension"
@@ -160,9 +170,13 @@ class TrajectoryWriter:
         return value
 
     def append(self, step: int, time: float, box_lo, box_hi, positions, velocities=None,
-               bond_force=None) -> None:
-        """Add one frame (positions unwrapped, SI)."""
+               bond_force=None, tilt=None) -> None:
+        """Add one frame (positions unwrapped, SI; ``tilt``: xy, xz, yz of a triclinic box)."""
         i = self.n_frames
+        if tilt is not None and self.tilt is None:
+            self.tilt = self._element(self.observables, "box_tilt", (3,), "m", compress=False)
+            self.tilt.resize(i, axis=0)  # earlier frames (none, in practice): untilted
+            self.file.attrs["fabmd_format_version"] = 2
         self.n_frames += 1
         self.step.resize((i + 1,))
         self.time.resize((i + 1,))
@@ -181,6 +195,9 @@ class TrajectoryWriter:
         if self.bond_data:
             self.bond_force.resize(i + 1, axis=0)
             self.bond_force[i] = np.nan if bond_force is None else bond_force
+        if self.tilt is not None:
+            self.tilt.resize(i + 1, axis=0)
+            self.tilt[i] = 0.0 if tilt is None else np.asarray(tilt, float)
 
     def close(self) -> Path:
         """Close and move the file into place; returns its path."""
@@ -218,6 +235,7 @@ class Frame:
     positions: np.ndarray
     velocities: np.ndarray | None = None
     bond_force: np.ndarray | None = None
+    tilt: np.ndarray | None = None  # xy, xz, yz of a triclinic box [m]
 
 
 def _bond_index(model: BeadModel) -> tuple[np.ndarray, np.ndarray]:
@@ -237,7 +255,11 @@ def frames_from_dumps(model: BeadModel, dump: Path, bond_dump: Path | None = Non
     keys, order = _bond_index(model) if bond_dump is not None else (None, None)
     pending = None
     n = model.n_beads
+    last_step = None
     for fr in iter_dump(dump):
+        if fr.step == last_step:  # a step written twice (a run set up again): once only
+            continue
+        last_step = fr.step
         if fr.data.shape[0] != n:
             raise InputError(f"{dump}: frame at step {fr.step} has {fr.data.shape[0]} beads, "
                              f"the model {n}")
@@ -254,7 +276,8 @@ def frames_from_dumps(model: BeadModel, dump: Path, bond_dump: Path | None = Non
         vel = (np.column_stack([fr.column(c) for c in ("vx", "vy", "vz")])
                if "vx" in fr.columns else None)
         frame = Frame(step=fr.step, time=fr.time if fr.time is not None else np.nan,
-                      box_lo=fr.box_lo, box_hi=fr.box_hi, positions=pos, velocities=vel)
+                      box_lo=fr.box_lo, box_hi=fr.box_hi, positions=pos, velocities=vel,
+                      tilt=fr.tilt)
         if bond_frames is not None:
             while pending is None or pending.step < fr.step:
                 pending = next(bond_frames, None)
@@ -293,7 +316,7 @@ def write_trajectory(path: Path, model: BeadModel, frames, *, velocities: bool =
     with TrajectoryWriter(path, model, velocities=velocities, bond_data=bond_data) as w:
         for fr in frames:
             w.append(fr.step, fr.time, fr.box_lo, fr.box_hi, fr.positions, fr.velocities,
-                     fr.bond_force)
+                     fr.bond_force, fr.tilt)
             if pv is not None:
                 pv.append(fr)
         n_frames = w.n_frames
@@ -367,7 +390,7 @@ def _finalise_on_root(run_dir: Path, paraview: bool, model: BeadModel | None) ->
     report["dump_bytes"] = dump.stat().st_size + (bond_dump.stat().st_size if bond_dump
                                                   else 0)
     report.update(n_beads=model.n_beads, n_bonds=model.n_bonds, format=FORMAT,
-                  format_version=FORMAT_VERSION)
+                  format_version=format_version(run_dir / TRAJECTORY_FILE))
     (run_dir / "trajectory.json").write_text(json.dumps(report, indent=2) + "\n")
     return str(run_dir / TRAJECTORY_FILE)
 
@@ -406,6 +429,12 @@ def check_format(f, path: Path | str = "") -> int:
     return version
 
 
+def format_version(path: Path) -> int:
+    """The ``fabmd_format_version`` of a trajectory file."""
+    with open_trajectory(path) as f:
+        return int(f.attrs["fabmd_format_version"])
+
+
 def open_trajectory(path: Path):
     """Open a trajectory read-only (an ``h5py.File``) after checking its format."""
     import h5py
@@ -427,7 +456,8 @@ def _strings(values) -> list[str]:
 
 
 def read_model(path: Path, frame: int = -1) -> BeadModel:
-    """The bead model stored in a trajectory, with the positions of one frame."""
+    """The bead model stored in a trajectory, with the positions of one frame (a tilted
+    box's tilt is not part of a bead model: see :func:`read_tilt`)."""
     from ..model.bead_model import AngleType, BondType, Yarn
 
     with open_trajectory(path) as f:
@@ -451,6 +481,13 @@ def read_model(path: Path, frame: int = -1) -> BeadModel:
         box_lo=lo, box_hi=lo + lengths, periodic=tuple(meta.get("periodic", [False] * 3)),
         angle_type_table=[AngleType(**a) for a in meta.get("angle_types", [])],
         info=meta.get("info", {}))
+
+
+def read_tilt(path: Path, frame: int = -1) -> np.ndarray | None:
+    """Tilt factors (xy, xz, yz) [m] of one frame's box; None for an orthogonal box."""
+    with open_trajectory(path) as f:
+        tilt = f["observables"].get("box_tilt")
+        return None if tilt is None else np.asarray(tilt["value"][frame], float)
 
 
 def trajectory_path(path: Path) -> Path:

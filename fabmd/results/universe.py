@@ -19,7 +19,8 @@ lengths even for the bond that closes a periodic fibre). Per-bond forces [N]
 (> 0 in tension) of the current frame are in ``u.trajectory.ts.data["bond_force"]``
 in the file's bond order (``/connectivity/bonds``, the bead model's); :func:`bond_forces` gives
 them in the order of ``u.bonds`` (which MDAnalysis sorts). ``u.fabmd`` holds the
-family names, the periodicity, the source path and that bond order.
+family names, the periodicity, the source path and that bond order. A sheared
+periodic cell (a trajectory with ``box_tilt``) gets triclinic ``dimensions``.
 """
 
 from __future__ import annotations
@@ -93,6 +94,17 @@ def reader_class():
 
         def __init__(self, filename, convert_units=False, **kwargs):
             super().__init__(filename, convert_units=False, **kwargs)
+
+        def _read_frame(self, frame):
+            ts = super()._read_frame(frame)
+            tilt = ts.data.get("box_tilt")
+            if tilt is not None and ts.dimensions is not None:  # a sheared periodic cell
+                from MDAnalysis.lib.mdamath import triclinic_box
+
+                lx, ly, lz = ts.dimensions[:3]
+                xy, xz, yz = (float(t) for t in tilt)
+                ts.dimensions = triclinic_box([lx, 0, 0], [xy, ly, 0], [xz, yz, lz])
+            return ts
 
     return FabmdH5MDReader
 

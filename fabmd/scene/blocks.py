@@ -90,11 +90,12 @@ def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True
     return outputs.trajectory(every, velocities=velocities, bond_forces=bond_forces)
 
 
-def trajectory_final(bond_forces: bool = True) -> str:
-    """After the last run: the final step as the trajectory's last frame."""
+def trajectory_final(bond_forces: bool = True, close: bool = False) -> str:
+    """After the last run: the final step as the trajectory's last frame (``close``: then
+    ``undump``, as LAMMPS needs before a ``reset_timestep``)."""
     from . import outputs
 
-    return outputs.trajectory_final(bond_forces)
+    return outputs.trajectory_final(bond_forces, close=close)
 
 
 def contact(model: BeadModel, contact_model: ContactModel | None,
@@ -109,16 +110,27 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
 
 def relax(model: BeadModel, time_step_s: float, held: str, free: str, quasi_static,
           reference_force_n: float, reference_energy_j: float, damping_ratio: float = 0.7,
-          drag_time_steps: float = 200.0) -> str:
+          drag_time_steps: float = 200.0, trajectory=None) -> str:
     """Relax with ``held`` fixed until quasi-static, then reset the clock (time 0).
 
     Local (Cundall) damping plus a light viscous drag γ = m/τ with τ =
     ``drag_time_steps`` time steps, which stops force-free floppy motion.
+
+    Args:
+        trajectory: a :class:`fabmd.scene.outputs.TrajectoryOutput` to write over the
+            relaxation (frames spread over a quarter of ``max_steps``, the final state
+            the last frame; closed before the clock is reset); None: no trajectory.
     """
     drag = float(np.median(model.masses)) / (drag_time_steps * time_step_s)
+    if trajectory is not None and trajectory.enabled:
+        dump = trajectory.commands(max(1, quasi_static.max_steps // 4))
+        final = trajectory.final_commands(close=True)
+    else:
+        dump = final = "# no trajectory of the relaxation"
     return render("relax", held=held, free=free, damping_ratio=damping_ratio, drag=drag,
                   monitors=quasi_static.monitors(free, reference_force_n, reference_energy_j),
-                  check_every=quasi_static.check_every, max_steps=quasi_static.max_steps)
+                  check_every=quasi_static.check_every, max_steps=quasi_static.max_steps,
+                  trajectory=dump, trajectory_final=final)
 
 
 def _tool_contact(tool: ToolContact, beads: list[BeadParameters], fix_id: str, group: str,

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .. import inputs
+from ..errors import InputError
 from .templates import render
 
 #: binary LAMMPS dump of the beads (id mol type xu yu zu [vx vy vz]), sorted by id
@@ -35,11 +36,23 @@ def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True
                   velocity_columns=" vx vy vz" if velocities else "", bond_dump=bond_dump)
 
 
-def trajectory_final(bond_forces: bool = True) -> str:
-    """After the last run: write the final step as the last frame (once)."""
+#: dump ids of the trajectory block (``undump`` them to close the files)
+DUMP_IDS = ("fabmd_trajectory", "fabmd_bonds")
+
+
+def trajectory_final(bond_forces: bool = True, close: bool = False) -> str:
+    """After the last run: write the final step as the last frame (once).
+
+    Args:
+        close: then ``undump`` the trajectory (needed before a ``reset_timestep``,
+            which LAMMPS refuses while a dump is active).
+    """
     bond_every = ("dump_modify     fabmd_bonds every 1" if bond_forces
                   else "# no bond forces in this trajectory")
-    return render("trajectory_final", bond_every=bond_every)
+    ids = DUMP_IDS if bond_forces else DUMP_IDS[:1]
+    close_text = ("\n".join(f"undump          {i}" for i in ids) if close
+                  else "# the dumps stay open (LAMMPS closes them at the end)")
+    return render("trajectory_final", bond_every=bond_every, close=close_text)
 
 
 @dataclass(frozen=True)
@@ -75,21 +88,38 @@ class TrajectoryOutput:
     def enabled(self) -> bool:
         return self.every_steps is not None or self.frames > 0
 
-    def every(self, total_steps: int) -> int:
-        """Steps between frames for a run of ``total_steps`` steps."""
+    def every(self, total_steps: int, multiple_of: int = 1) -> int:
+        """Steps between frames for a run of ``total_steps`` steps.
+
+        Args:
+            multiple_of: round the interval up to a multiple of this (e.g. a driven
+                test's output interval, so that frames fall on curve samples); an
+                explicit ``every_steps`` is kept as it is.
+        """
         if self.every_steps is not None:
             return self.every_steps
-        return max(1, int(total_steps) // max(1, self.frames))
+        raw = max(1, int(total_steps) // max(1, self.frames))
+        m = max(1, int(multiple_of))
+        return m * max(1, -(-raw // m))
 
-    def commands(self, total_steps: int) -> str:
-        """The outputs-block text (a comment when disabled)."""
+    def commands(self, total_steps: int, multiple_of: int = 1) -> str:
+        """The outputs-block text (a comment when disabled); see :meth:`every`."""
         if not self.enabled:
             return "# ---- output: no trajectory (trajectory.frames = 0)"
-        return trajectory(self.every(total_steps), velocities=self.velocities,
+        return trajectory(self.every(total_steps, multiple_of), velocities=self.velocities,
                           bond_forces=self.bond_forces)
 
-    def final_commands(self) -> str:
-        """Text to put after the last run, before ``finish`` (empty when disabled)."""
+    def final_commands(self, close: bool = False) -> str:
+        """Text to put after the last run of the trajectory, before ``finish`` (a comment
+        when disabled). ``close``: also ``undump`` (before a ``reset_timestep``)."""
         if not self.enabled:
             return "# no trajectory: no final frame"
-        return trajectory_final(self.bond_forces)
+        return trajectory_final(self.bond_forces, close=close)
+
+
+def check_trajectory(name: str, value) -> None:
+    """Refuse anything but a :class:`TrajectoryOutput` for a protocol's ``trajectory``."""
+    if not isinstance(value, TrajectoryOutput):
+        raise InputError(f"{name} must be a TrajectoryOutput (e.g. TrajectoryOutput(frames=20); "
+                         f"in a scene file a table [<protocol>.trajectory] frames = 20), "
+                         f"got {value!r}")
