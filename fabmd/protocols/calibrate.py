@@ -25,6 +25,7 @@ from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
 from ..results.measure import thickness_m
+from ..scene.outputs import TrajectoryOutput
 from .crimp import Crimp, CrimpResult
 
 #: the largest shrink or expansion the calibration tries
@@ -128,7 +129,8 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
         InputError: a target is impossible on its face (thickness not below the
             loose fabric's, a family the fabric does not have), before LAMMPS starts.
     """
-    base = base or Crimp()
+    # the trial crimps write no trajectory unless the base crimp asks for one
+    base = base or Crimp(trajectory=TrajectoryOutput(frames=0))
     engine = engine or Engine(progress=False)
     max_runs = inputs.positive_int("calibration.max_runs", max_runs, minimum=2)
     fams = tuple(thickness_families or default_thickness_families(model))

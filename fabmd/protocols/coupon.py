@@ -111,9 +111,9 @@ class Coupon:
             "fix             integrate free nve\n"
             "# a free coupon has nothing to stop rigid drift; local damping does not see it\n"
             "fix             no_drift all momentum 100 linear 1 1 1 angular",
+            blocks.guards(model, dt),  # before the relaxation: it is the run to guard
             blocks.relax(model, dt, "held", "free", self.relax, ref,
                          model.n_bonds * ref**2 / (2 * k), trajectory=self.trajectory),
-            blocks.guards(model, dt),
             render("finish", final_data=f"{COUPON}.data"),
         ])
 
