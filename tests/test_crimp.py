@@ -175,3 +175,24 @@ def test_periodic_cell_matches_the_interior_of_a_finite_piece(tmp_path, crimped)
     # and it is far cheaper: 16x fewer beads, fewer steps
     assert finite.n_beads == 16 * cell.n_beads
     assert result.summary["steps"] > periodic.summary["steps"]
+
+
+def test_3d_example_crimps_as_a_periodic_cell_without_pass_through(tmp_path):
+    """Binders shrink and compact the 3D interlock cell; no yarn goes through another."""
+    from fabmd.examples_dir import example_scene
+    from fabmd.pipeline import periodic_cell
+    from fabmd.presets import apply_preset
+    from fabmd.scenefile import load_scene
+
+    scene = apply_preset(load_scene(example_scene("angle_interlock_3d.toml")), "fast")
+    cell = periodic_cell(scene)
+    assert cell.periodic[:2] == (True, True) and "binder" in cell.family_names
+    result = Crimp(expansion={"binder": -0.1}, contact=scene.contact).run(
+        cell, tmp_path / "c3d", engine=Engine(progress=False))
+    s = result.summary
+    assert s["quasi_static"]
+    assert s["crimped"]["thickness_m"] < 0.95 * s["loose"]["thickness_m"]
+    assert s["crimped"]["tension"]["binder"]["mean_fibre_tension_n"] > 0
+    report = passed_through(cell, result.model)
+    assert report["pairs_checked"] > 1000
+    assert report["flipped_pairs"] == 0, report["flipped_yarns"]
