@@ -27,12 +27,12 @@ from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
 from ..model.contact import ToolContact
 from ..model.material import GLASS, VirtualFibre
-from ..results.folder import read_print_file, write_csv, write_json
+from ..results.folder import read_print_file
 from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
-from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, RunResult, overlap_summary, run_folder, scene_dict, write_run_folder
 
 PROTOCOL = "capstan"
 TOOL_FIX = "capstan"
@@ -247,19 +247,10 @@ class Capstan:
         return result
 
 
-@dataclass
-class CapstanResult:
+class CapstanResult(RunResult):
     """Curve and summary of a capstan run."""
 
-    run_dir: Path
-    curve: dict[str, np.ndarray]
-    summary: dict
-
-    def write(self) -> None:
-        if not mpi.is_root():
-            return
-        write_csv(self.run_dir / "curve.csv", self.curve)
-        write_json(self.run_dir / "summary.json", self.summary)
+    def plot(self) -> None:
         c, s = self.curve, self.summary
         pulling = c["displacement_m"] > 0  # the load has ramped up
         u = 1e3 * c["displacement_m"][pulling]

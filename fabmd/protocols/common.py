@@ -7,6 +7,7 @@ import enum
 import math
 import shlex
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -16,10 +17,29 @@ from ..engine.standalone import command_line
 from ..errors import OverlapWarning
 from ..model.bead_model import BeadModel
 from ..model.contact import ContactModel
-from ..results.folder import prepare_run_folder, read_print_file, write_json
+from ..results.folder import prepare_run_folder, read_print_file, write_csv, write_json
 from ..scene.blocks import OVERLAP_FILE, TOOL_OVERLAP_WARNING
 
 DATA_FILE = "model.data"
+
+
+@dataclass
+class RunResult:
+    """Curve and summary of a run; :meth:`write` saves them (rank 0) with the plot."""
+
+    run_dir: Path
+    curve: dict[str, np.ndarray]
+    summary: dict
+
+    def write(self) -> None:
+        if not mpi.is_root():
+            return
+        write_csv(self.run_dir / "curve.csv", self.curve)
+        write_json(self.run_dir / "summary.json", self.summary)
+        self.plot()
+
+    def plot(self) -> None:
+        """The protocol's plot(s) into the run folder (none by default)."""
 
 
 def input_name(protocol: str) -> str:

@@ -37,32 +37,27 @@ from ..errors import SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import model_bead_parameters
 from ..results.curves import curve_difference
-from ..results.folder import read_ave_time, read_print_file, write_csv, write_json
+from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
-from .common import input_name, resume_folder, scene_dict, write_run_folder
+from .common import RunResult, input_name, resume_folder, scene_dict, write_run_folder
 
 
 @dataclass
-class DrivenResult:
+class DrivenResult(RunResult):
     """Curve, summary and plots of a driven test.
 
     ``plots`` holds keyword sets for :func:`fabmd.results.plots.plot_curves`
     (``path`` relative to the run folder).
     """
 
-    run_dir: Path
-    curve: dict[str, np.ndarray]
-    summary: dict
     plots: list[dict] = field(default_factory=list)
 
-    def write(self) -> None:
-        write_csv(self.run_dir / "curve.csv", self.curve)
-        write_json(self.run_dir / "summary.json", self.summary)
+    def plot(self) -> None:
         for spec in self.plots:
             spec = dict(spec)
             plot_curves(self.run_dir / spec.pop("path"), **spec)

@@ -19,14 +19,14 @@ from ..errors import SimulationFailed
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
 from ..model.material import GLASS, VirtualFibre
-from ..results.folder import read_print_file, write_csv, write_json
+from ..results.folder import read_print_file
 from ..results.plots import plot_curves
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput
 from ..scene.templates import render
-from .common import DATA_FILE, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, RunResult, run_folder, scene_dict, write_run_folder
 
 PROTOCOL = "fibre_tension"
 
@@ -166,19 +166,10 @@ class FibreTension:
         return result
 
 
-@dataclass
-class FibreTensionResult:
+class FibreTensionResult(RunResult):
     """Curve and summary of a fibre-tension run."""
 
-    run_dir: Path
-    curve: dict[str, np.ndarray]
-    summary: dict
-
-    def write(self) -> None:
-        if not mpi.is_root():
-            return
-        write_csv(self.run_dir / "curve.csv", self.curve)
-        write_json(self.run_dir / "summary.json", self.summary)
+    def plot(self) -> None:
         c = self.curve
         s = self.summary
         plot_curves(self.run_dir / "curve.png", [
