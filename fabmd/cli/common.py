@@ -47,10 +47,10 @@ def add_preset_options(p: argparse.ArgumentParser) -> None:
     """``--fast`` / ``--accurate``: the presets of :mod:`fabmd.presets`."""
     group = p.add_mutually_exclusive_group()
     group.add_argument("--fast", dest="preset", action="store_const", const="fast",
-                       help="one virtual fibre per yarn, twice the loading speed "
+                       help="one virtual fibre per yarn, bead spacing 0.25 d "
                             "(see README: expected error)")
     group.add_argument("--accurate", dest="preset", action="store_const", const="accurate",
-                       help="19 virtual fibres per yarn, half the loading speed")
+                       help="19 virtual fibres per yarn (about 8x the run time)")
     p.set_defaults(preset="default")
 
 
