@@ -53,12 +53,16 @@ def fibre_tangents(positions: np.ndarray, fibre_ids: np.ndarray) -> np.ndarray:
 
 
 def _family_signs(tangents: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """±1 per bead: orient the (axial) tangents of one family like their mean direction."""
+    """±1 per bead: orient the (axial) tangents of one family like their mean direction,
+    taken between −45° and 135° from x (warp along +x, weft along +y), so that the sign of
+    γ does not depend on which way the fibres were numbered."""
     t = tangents[mask, :2]
     theta = np.arctan2(t[:, 1], t[:, 0])
     w = np.hypot(t[:, 0], t[:, 1])
     mean = 0.5 * np.arctan2((w * np.sin(2 * theta)).sum(), (w * np.cos(2 * theta)).sum())
     axis = np.array([np.cos(mean), np.sin(mean)])
+    if axis[0] + axis[1] < 0:
+        axis = -axis
     sign = np.where(t @ axis >= 0, 1.0, -1.0)
     out = np.ones(len(tangents))
     out[mask] = sign

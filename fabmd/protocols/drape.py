@@ -73,9 +73,12 @@ from .driven import (
 PROTOCOL = "drape"
 SYMMETRIES = ("quarter", "full")
 #: tool wall fix ids (their contact arrays feed the forces and the overlap monitor)
-TOOLS = ("punch", "die", "holder")
+TOOLS = ("punch", "die", "die_wall", "holder")
 #: forces and powers are sampled every this many steps for the interval means
 SAMPLE_EVERY = 5
+#: overlap monitor interval, and its log of the clamping phase (overlap.dat: the draw)
+OVERLAP_EVERY = 100
+CLAMP_OVERLAP_FILE = "clamp_overlap.dat"
 
 
 @dataclass(frozen=True)
@@ -96,6 +99,9 @@ class DrapeGeometry:
     punch_reach_m: float
     die_reach_m: float
     contact_angle_rad: float
+    flange_reach_m: float
+    face_radius_m: float
+    diameter_m: float
     sym_x: tuple[int, ...]
     sym_y: tuple[int, ...]
 
@@ -151,6 +157,10 @@ class Drape(DrivenTest):
             default the largest that keeps the control smooth (see :meth:`holder_control`).
         symmetry: ``"quarter"`` (two symmetry planes) or ``"full"``.
         tool: fibre–tool contact (punch, die and holder), friction μ (default 0.2).
+        holder_damping_ratio: normal damping of the holder's contacts, fraction of critical,
+            in (0, 1] (default 0.03: enough to keep the tangential history, see the contact
+            section of the README; the damper under the holder limits how fast its force
+            control may act, so a lighter one lets it follow the fabric's thickness).
         contact: fibre–fibre contact.
         speed_fraction: punch speed over the fibres' axial wave speed (> 0, <= 0.05).
         ramp_fraction: share of the draw spent reaching full punch speed smoothly.
@@ -178,6 +188,7 @@ class Drape(DrivenTest):
     holder_gain_m_s_n: float | None = None
     symmetry: str = "quarter"
     tool: ToolContact = field(default_factory=lambda: ToolContact(friction=0.2))
+    holder_damping_ratio: float = 0.03
     contact: ContactModel = field(default_factory=ContactModel)
     speed_fraction: float = 5e-4
     ramp_fraction: float = 0.05
@@ -214,6 +225,8 @@ class Drape(DrivenTest):
         inputs.one_of("drape.symmetry", self.symmetry, SYMMETRIES)
         if not isinstance(self.tool, ToolContact):
             raise InputError(f"drape.tool must be a ToolContact, got {self.tool!r}")
+        inputs.in_range("drape.holder_damping_ratio", self.holder_damping_ratio, 0.0, 1.0,
+                        low_open=True)
         inputs.in_range("drape.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
         inputs.in_range("drape.ramp_fraction", self.ramp_fraction, 0, 0.9)
         if not isinstance(self.clamp, QuasiStatic):
@@ -235,8 +248,9 @@ class Drape(DrivenTest):
     def die_radius_m(self) -> float:
         return self.punch_radius_m + self.die_clearance_m
 
-    @property
-    def holder_radius_m(self) -> float:
+    def holder_radius_for(self, diameter_m: float) -> float:
+        """Inner radius of the holder: given, or the die's opening."""
+        del diameter_m
         return self.holder_inner_radius_m or self.die_radius_m
 
     def check_orientation(self, model: BeadModel) -> None:
@@ -289,11 +303,12 @@ class Drape(DrivenTest):
         p = full.positions
         half = (float(min(p[:, 0].max(), -p[:, 0].min())),
                 float(min(p[:, 1].max(), -p[:, 1].min())))
-        need = self.holder_radius_m + spacing
+        holder_radius = self.holder_radius_for(float(full.diameters.max()))
+        need = holder_radius + spacing
         if min(half) < need:
             raise InputError(f"the blank ({2e3 * half[0]:.1f} x {2e3 * half[1]:.1f} mm) must "
                              f"reach past the holder's opening (radius "
-                             f"{1e3 * self.holder_radius_m:.1f} mm) by a yarn spacing: use a "
+                             f"{1e3 * holder_radius:.1f} mm) by a yarn spacing: use a "
                              f"blank at least {2e3 * need:.1f} mm wide")
         keep = (p[:, 0] > 0) & (p[:, 1] > 0) if self.symmetry == "quarter" else \
             np.ones(full.n_beads, bool)
@@ -339,7 +354,8 @@ class Drape(DrivenTest):
         thickness = float(info["thickness_m"])
         r_xy = np.hypot(q[:, 0], q[:, 1])
         z_die = float(q[:, 2].min() - 0.5 * d)
-        z_holder = float(q[r_xy > self.holder_radius_m, 2].max() + 0.5 * d)
+        holder_radius = self.holder_radius_for(d)
+        z_holder = float(q[r_xy > holder_radius, 2].max() + 0.5 * d)
         cap = r_xy < self.die_radius_m + d
         gap = 0.1 * d
         punch_z = float((q[cap, 2].max() if cap.any() else q[:, 2].max()) + 0.5 * d + gap
@@ -356,15 +372,21 @@ class Drape(DrivenTest):
             sym_x = tuple(int(i) for i in ends[q[ends, 0] < 1.01 * longest])
             sym_y = tuple(int(i) for i in ends[q[ends, 1] < 1.01 * longest])
         centre_above_die = punch_z - self.travel_from(gap) - z_die
+        # fabric that ends up inside the opening: at most the punch arc below the die face
+        # plus the way out to the die edge (fibres do not stretch), plus margins
+        theta = math.acos(max(-1.0, 1.0 - self.depth_m / r))
+        path = r * theta + max(0.0, self.die_radius_m - r * math.sin(theta))
+        flange = max(1.1 * path + 2 * spacing + d, self.die_radius_m + 2 * spacing + d)
         return DrapeGeometry(
             quarter=quarter, radius_m=r, die_radius_m=self.die_radius_m,
-            holder_radius_m=self.holder_radius_m, z_die_m=z_die, z_holder_m=z_holder,
+            holder_radius_m=holder_radius, z_die_m=z_die, z_holder_m=z_holder,
             punch_z_m=punch_z, gap_m=gap, thickness_m=thickness, spacing_m=spacing,
             half_size_m=half, punch_reach_m=1.25 * wrap + 2 * spacing + d,
             die_reach_m=max(0.0, self.die_radius_m - 2 * spacing - d),
             contact_angle_rad=contact_angle_rad(r, self.die_radius_m, centre_above_die,
                                                 thickness),
-            sym_x=sym_x, sym_y=sym_y)
+            flange_reach_m=flange, face_radius_m=2.0 * math.hypot(*half) + 10 * d,
+            diameter_m=d, sym_x=sym_x, sym_y=sym_y)
 
     # -- loading and time -------------------------------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -408,6 +430,11 @@ class Drape(DrivenTest):
                 "clamp_tolerance": 0.05, "clamp_check_every": self.clamp.check_every,
                 "clamp_max_steps": self.clamp.max_steps}
 
+    @property
+    def holder_tool(self) -> ToolContact:
+        """The tool contact of the holder: the tools' with its own damping."""
+        return dataclasses.replace(self.tool, damping_ratio=self.holder_damping_ratio)
+
     def holder_share_n(self, geometry: DrapeGeometry) -> float:
         return self.holder_force_n * geometry.share
 
@@ -425,7 +452,7 @@ class Drape(DrivenTest):
         damper (``ToolContact.damping_ratio``).
         """
         beads = model_bead_parameters(model)
-        wall = self.tool.wall_coefficients(beads)
+        wall = self.holder_tool.wall_coefficients(beads)
         k_pair = self.contact.normal_stiffness_n_per_m(beads)
         k_stack = 1.0 / (2.0 / wall["kn"] + 1.0 / k_pair)
         mass = min(b.mass_kg for b in beads)
@@ -474,17 +501,25 @@ class Drape(DrivenTest):
         beads = model_bead_parameters(model)
         steps = self.steps(model)
         control = self.holder_control(model, g)
-        walls = "\n".join(blocks.tool_region(self.tool, beads, tool, tool, group=f"{tool}_zone")
-                          for tool in TOOLS)
+        zones = {"punch": ("punch", "punch_zone"), "die": ("die", "die_zone"),
+                 "die_wall": ("die_wall", "die_wall_zone"), "holder": ("holder", "holder_zone")}
+        walls = "\n".join(blocks.tool_region(self.holder_tool if tool == "holder" else self.tool,
+                                             beads, region, tool, group=group)
+                          for tool, (region, group) in zones.items())
         text = render(
             "drape", symmetry=self.symmetry, radius=g.radius_m, punch_z=g.punch_z_m,
             z_die=g.z_die_m, die_radius=g.die_radius_m, holder_radius=g.holder_radius_m,
+            flange_reach=g.flange_reach_m, die_wall_gap=0.5 * g.diameter_m,
+            face_radius=g.face_radius_m, z_face_top=g.z_die_m + 1e-6 * g.face_radius_m,
+            wall_lo=g.z_die_m - 2 * g.radius_m, wall_hi=g.z_die_m - 0.5 * g.diameter_m,
             holder_force=self.holder_share_n(g), punch_reach=g.punch_reach_m,
             die_reach=g.die_reach_m, z_holder=g.z_holder_m, walls=walls,
             holder_gain=control["gain_m_s_n"], symmetry_fixes=self.symmetry_fixes(g),
             holder_ki=1.0 / control["integral_time_s"],
             guards=blocks.guards(model, dt),
-            overlap=blocks.overlap_monitor(model, self.contact, beads, tool_fixes=TOOLS),
+            overlap=blocks.overlap_monitor(model, self.contact, beads, every=OVERLAP_EVERY,
+                                           tool_fixes=TOOLS, file=CLAMP_OVERLAP_FILE),
+            overlap_every=OVERLAP_EVERY,
             clamp_every=max(1, self.clamp.check_every // 5),
             holder_integral_time=control["integral_time_s"],
             **self.clamp_values(model, g),
@@ -556,16 +591,18 @@ def wrinkling(reference: np.ndarray, final: np.ndarray, g: DrapeGeometry,
     out = {"zone": "beads over the punch cap within 0.9 x the contact angle",
            "contact_angle_deg": math.degrees(g.contact_angle_rad),
            "beads": int(zone.sum()), "fabric_thickness_m": g.thickness_m,
-           "lying_band_m": 0.5 * g.thickness_m,
+           "lying_band_m": 0.5 * (g.thickness_m - g.diameter_m),
            "note": "deviation = distance to the punch sphere - R - t/2; a fabric lying on "
-                   "the punch has |deviation| <= t/2 - d/2 (its bead layers); wrinkles lift it "
-                   "beyond"}
+                   "the punch has |deviation| <= (t - d)/2 (its bead layers, lying_band_m); "
+                   "wrinkle_height_m: how far the largest deviation exceeds that band"}
     if zone.any():
         out.update(max_deviation_m=float(dev[zone].max()),
                    rms_deviation_m=float(np.sqrt(np.mean(dev[zone] ** 2))),
-                   min_deviation_m=float(dev[zone].min()))
+                   min_deviation_m=float(dev[zone].min()),
+                   wrinkle_height_m=max(0.0, float(dev[zone].max()) - out["lying_band_m"]))
     else:
-        out.update(max_deviation_m=None, rms_deviation_m=None, min_deviation_m=None)
+        out.update(max_deviation_m=None, rms_deviation_m=None, min_deviation_m=None,
+                   wrinkle_height_m=None)
     return out
 
 
@@ -598,6 +635,28 @@ def draw_in(reference: np.ndarray, final: np.ndarray, g: DrapeGeometry) -> dict:
                       "yarn spacing of the edge point along x (warp), y (weft) and the corner "
                       "(diagonal)")
     return result
+
+
+def merged_overlap(run_dir: Path, contact: ContactModel) -> dict:
+    """Largest overlaps of the clamping phase and of the draw together (each has its log:
+    the step count restarts in between)."""
+    draw = overlap_summary(run_dir, contact, warn=False)
+    clamp = overlap_summary(run_dir, contact, file=CLAMP_OVERLAP_FILE, warn=False)
+    if not draw or not clamp:
+        return draw or clamp
+    out = dict(draw)
+    for key in ("max_overlap_ratio", "max_pair_overlap_ratio", "max_tool_overlap_ratio"):
+        out[key] = max(draw[key], clamp[key])
+    out["overlap_samples"] = draw["overlap_samples"] + clamp["overlap_samples"]
+    out["warnings"] = [f"clamping: {w}" for w in clamp["warnings"]] + draw["warnings"]
+    out["max_overlap_ratio_clamping"] = clamp["max_overlap_ratio"]
+    if out["warnings"] and mpi.is_root():
+        import warnings
+
+        from ..errors import OverlapWarning
+
+        warnings.warn(out["warnings"][0], OverlapWarning, stacklevel=2)
+    return out
 
 
 def clamp_steps(run_dir: Path) -> int | None:
@@ -634,6 +693,12 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
              "tool_contact_work_j": tool_j * scale}
     if out.contact_j is not None:
         curve["contact_work_j"] = out.contact_j * scale
+    # inertia: the rate of change of the fabric's downward momentum is the part of the tool
+    # forces that accelerates it rather than deforms it
+    momentum = -out["momentum_z_kg_m_s"] * scale
+    inertial = np.gradient(momentum, out["time_s"]) if len(momentum) > 2 else 0 * momentum
+    curve["momentum_z_kg_m_s"] = -momentum
+    curve["inertial_force_n"] = inertial
     load = test.loading(model)
     started = started_mask(out, load, travel / test.travel_m(model))
     # holder force: interval means over the draw (after the clamping phase)
@@ -684,16 +749,27 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
     cell = test.shear_cell_m or 2.0 * g.spacing_m
     xe, ye = shear_grid(g, cell)
     fld = surface_shear_angle_field(ref, cur, model.fibre_ids, model.families, xe, ye)
+    # the largest shear angle over the cells clear of the blank's edges by a yarn spacing (at
+    # a cut edge the free fibre ends turn without shearing the fabric)
+    hx, hy = g.half_size_m
+    xc, yc = np.meshgrid(fld.x_centres_m, fld.y_centres_m)
+    interior = ((np.abs(xc) + 0.5 * cell <= hx - 0.5 * g.spacing_m)
+                & (np.abs(yc) + 0.5 * cell <= hy - 0.5 * g.spacing_m))
     finite = np.isfinite(fld.values)
-    absg = np.abs(fld.values[finite])
-    jmax, imax = np.unravel_index(np.nanargmax(np.abs(np.where(finite, fld.values, 0))),
-                                  fld.values.shape)
-    shear = {"cell_m": cell, "cells": int(finite.sum()),
+    inside = finite & interior
+    absg = np.abs(fld.values[inside])
+    where = np.where(inside, np.abs(np.nan_to_num(fld.values)), -1.0)
+    jmax, imax = np.unravel_index(np.argmax(where), fld.values.shape)
+    shear = {"cell_m": cell, "cells": int(inside.sum()),
              "max_abs_deg": float(absg.max()) if absg.size else None,
              "p95_abs_deg": float(np.percentile(absg, 95)) if absg.size else None,
              "max_at_m": [float(fld.x_centres_m[imax]), float(fld.y_centres_m[jmax])],
+             "max_abs_all_cells_deg": float(np.abs(fld.values[finite]).max())
+             if finite.any() else None,
              "method": "angle between the summed warp and weft bead tangents (3D) per cell of "
-                       "a grid over the initial in-plane positions, gamma = 90 - angle"}
+                       "a grid over the initial in-plane positions, gamma = 90 - angle; the "
+                       "largest value over the cells clear of the blank's edges by a yarn "
+                       "spacing (max_abs_all_cells_deg: all cells)"}
     wrinkle = wrinkling(ref, cur, g, float(travel[-1]))
     drawin = draw_in(ref, cur, g)
     dist = np.linalg.norm(cur - np.array([0.0, 0.0, g.punch_z_m - float(travel[-1])]), axis=1)
@@ -703,6 +779,19 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
              "furthest_touching_start_radius_m": float(r0[touching].max())
              if touching.any() else None}
     ke = kinetic_to_work_ratio(out, started)
+    loaded = started & (punch > 0.1 * punch.max()) if punch.max() > 0 else started
+    duration = float(out["time_s"][-1] - out["time_s"][0])
+    inertia = {
+        "mean_inertial_force_n": float((momentum[-1] - momentum[0]) / duration)
+        if duration > 0 else None,
+        "mean_punch_force_n": float(out.external_work_j[-1] * scale / max(depth[-1], 1e-300)),
+        "max_inertial_to_punch_force": float(np.max(np.abs(inertial[loaded])
+                                                    / punch[loaded])) if loaded.any() else None,
+        "note": "inertial force = rate of change of the fabric's downward momentum (the part "
+                "of the tool forces that accelerates the fabric); mean over the draw, and its "
+                "largest ratio to the punch force where that exceeds a tenth of its maximum "
+                "after the start-up. The kinetic energy is mostly the fabric moving with the "
+                "punch, so KE/W overstates the dynamic part where the punch force is small"}
     rest = np.array([bt.rest_length_m for bt in model.bond_type_table])[model.bond_types - 1]
     strain = final.bond_lengths() / rest - 1.0
     summary = {
@@ -712,6 +801,7 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
         "n_beads_in_tool_zones": {
             "punch": int((r0 <= g.punch_reach_m).sum()),
             "die": int((r0 >= g.die_reach_m).sum()),
+            "die_wall": int(((r0 >= g.die_reach_m) & (r0 <= g.flange_reach_m)).sum()),
             "holder": int((r0 > g.holder_radius_m).sum())},
         "symmetry_held_beads": {"x": len(g.sym_x), "y": len(g.sym_y)},
         "punch_radius_m": g.radius_m,
@@ -730,7 +820,8 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
         "clamp_steps": clamp_steps(run_dir),
         "punch_speed_m_s": load.speed_m_s,
         "max_punch_force_n": float(punch.max()),
-        "final_punch_force_n": float(punch[-1]),
+        "final_punch_force_n": float(punch[depth >= 0.95 * depth[-1]].mean()),
+        "final_punch_force_note": "mean over the last 5 % of the depth",
         "punch_force_at_depth_n": {f"{k:g}": v for k, v in values_at(
             depth, punch, test.report_depths_m).items()},
         "holder_force": holder_summary,
@@ -740,13 +831,14 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
         "draw_in": drawin,
         "punch_reach": reach,
         "max_kinetic_to_external_work": ke,
+        "inertia": inertia,
         "quasi_static_note": "kinetic energy of the fabric over the work done so far, after "
                              "the smooth start and the first tenth of the travel",
         "energy_balance": terms,
         "forces_note": "forces and energies are for the whole blank (the quarter model's x 4)"
                        if g.quarter else "forces and energies of the whole blank",
     }
-    summary.update(overlap_summary(run_dir, test.contact))
+    summary.update(merged_overlap(run_dir, test.contact))
     write_final(run_dir, model, final, fld, g, test, wrinkle, travel[-1])
     notes = (f"R = {1e3 * g.radius_m:g} mm, depth {1e3 * test.depth_m:g} mm, {test.symmetry}"
              f"\nholder {set_force:g} N, mu tool {test.tool.friction:g}"
