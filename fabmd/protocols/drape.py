@@ -248,9 +248,9 @@ class Drape(DrivenTest):
     def die_radius_m(self) -> float:
         return self.punch_radius_m + self.die_clearance_m
 
-    def holder_radius_for(self, diameter_m: float) -> float:
+    @property
+    def holder_radius_m(self) -> float:
         """Inner radius of the holder: given, or the die's opening."""
-        del diameter_m
         return self.holder_inner_radius_m or self.die_radius_m
 
     def check_orientation(self, model: BeadModel) -> None:
@@ -303,7 +303,7 @@ class Drape(DrivenTest):
         p = full.positions
         half = (float(min(p[:, 0].max(), -p[:, 0].min())),
                 float(min(p[:, 1].max(), -p[:, 1].min())))
-        holder_radius = self.holder_radius_for(float(full.diameters.max()))
+        holder_radius = self.holder_radius_m
         need = holder_radius + spacing
         if min(half) < need:
             raise InputError(f"the blank ({2e3 * half[0]:.1f} x {2e3 * half[1]:.1f} mm) must "
@@ -354,7 +354,7 @@ class Drape(DrivenTest):
         thickness = float(info["thickness_m"])
         r_xy = np.hypot(q[:, 0], q[:, 1])
         z_die = float(q[:, 2].min() - 0.5 * d)
-        holder_radius = self.holder_radius_for(d)
+        holder_radius = self.holder_radius_m
         z_holder = float(q[r_xy > holder_radius, 2].max() + 0.5 * d)
         cap = r_xy < self.die_radius_m + d
         gap = 0.1 * d
