@@ -840,9 +840,12 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
     }
     summary.update(merged_overlap(run_dir, test.contact))
     write_final(run_dir, model, final, fld, g, test, wrinkle, travel[-1])
+    ratio = (inertia["mean_inertial_force_n"] / inertia["mean_punch_force_n"]
+             if inertia["mean_inertial_force_n"] is not None and inertia["mean_punch_force_n"]
+             else None)
     notes = (f"R = {1e3 * g.radius_m:g} mm, depth {1e3 * test.depth_m:g} mm, {test.symmetry}"
              f"\nholder {set_force:g} N, mu tool {test.tool.friction:g}"
-             f"\nKE/W after start-up <= {ke if ke is None else round(ke, 4)}"
+             f"\nmean inertial / punch force {'-' if ratio is None else f'{ratio:.2g}'}"
              f"\n{model.n_beads} beads")
     plots = [
         {"path": "curve.png", "series": [{"x": 1e3 * depth, "y": punch, "label": "punch"}],
