@@ -48,6 +48,10 @@ TESTS: dict[str, TestKind] = {
                               {"length_m": 0.100, "width_m": 0.100, "relax": None}),
     "bias-extension": TestKind("fabmd.protocols.bias_extension", "BiasExtension",
                                {"length_m": 0.150, "width_m": 0.050, "angle_deg": 45.0}),
+    # a square blank cut as tiled (no free relaxation: the drape's clamping phase relaxes it
+    # under the blank holder); the quarter model keeps its x > 0, y > 0 part
+    "drape": TestKind("fabmd.protocols.drape", "Drape",
+                      {"length_m": 0.200, "width_m": 0.200, "relax": None}),
     "periodic-tension": TestKind("fabmd.protocols.periodic", "PeriodicTension", None),
     "periodic-shear": TestKind("fabmd.protocols.periodic", "PeriodicShear", None),
 }

@@ -21,7 +21,7 @@ def test_names_map_to_the_protocols():
     assert isinstance(build_protocol("periodic-tension"), PeriodicTension)
     assert isinstance(build_protocol("periodic-shear"), PeriodicShear)
     assert set(TESTS) == {"tension", "picture-frame", "bias-extension", "periodic-tension",
-                          "periodic-shear"}
+                          "periodic-shear", "drape"}
 
 
 def test_settings_tables_become_objects():

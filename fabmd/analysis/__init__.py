@@ -1,5 +1,6 @@
 """Analysis of fabric states (pure numpy, SI): yarn centrelines and curvature, crimp,
-yarn cross-sections, in-plane yarn angles and the shear-angle field.
+yarn cross-sections, in-plane yarn angles and the shear-angle field (also on a draped,
+curved fabric: :func:`surface_shear_angle_field`).
 
 Every function works on a :class:`FabricFrame` — the unwrapped bead positions of
 one frame with their fibre/yarn identity — made from a bead model, a trajectory
@@ -30,6 +31,7 @@ from .angles import (
 )
 from .frame import FabricFrame
 from .sections import CrossSection, convex_hull, cross_section
+from .surface import fibre_tangents, grid_edges, surface_shear_angle_field
 from .yarns import (
     centreline,
     crimp,
@@ -56,12 +58,15 @@ __all__ = [
     "curvature",
     "family_axes_deg",
     "fibre_segments",
+    "fibre_tangents",
+    "grid_edges",
     "in_plane_angle_field",
     "path_length",
     "resample",
     "segment_directions",
     "shear_angle_field",
     "shear_between_axes_deg",
+    "surface_shear_angle_field",
     "yarn_centreline",
     "yarn_centrelines",
     "zone_mask",

@@ -1,0 +1,224 @@
+"""Hemispherical-punch draping: shear-angle analysis, validation, holder force control,
+quarter against full model."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fabmd.analysis import grid_edges, surface_shear_angle_field
+from fabmd.analysis.synthetic import woven_sheet
+from fabmd.errors import InputError
+from fabmd.protocols.drape import Drape, contact_angle_rad
+
+from .fabrics import plain_weave_cell
+
+#: a small drape of the tiny plain weave (2 mm yarn spacing): punch, depth, clearance
+SMALL = {"punch_radius_m": 5e-3, "depth_m": 3e-3, "die_clearance_m": 1.5e-3,
+         "holder_force_n": 20.0, "speed_fraction": 1e-3}
+
+
+# -- shear angle from the yarn tangents ------------------------------------------------------
+def _sheets(shear_deg: float):
+    flat = woven_sheet(8, 8, spacing_m=2e-3, fibres=(2, 2), periodic=False)
+    sheared = woven_sheet(8, 8, spacing_m=2e-3, fibres=(2, 2), periodic=False,
+                          shear_deg=shear_deg)
+    p = flat.positions
+    cell = 4e-3  # one unit cell of the plain weave: the crimp cancels
+    edges = (grid_edges(p[:, 0].min(), p[:, 0].max(), cell),
+             grid_edges(p[:, 1].min(), p[:, 1].max(), cell))
+    return flat, sheared, edges
+
+
+@pytest.mark.parametrize("shear_deg", [0.0, 10.0, 30.0, 45.0])
+def test_shear_angle_of_a_sheared_grid_is_the_imposed_angle(shear_deg):
+    flat, sheared, (xe, ye) = _sheets(shear_deg)
+    field = surface_shear_angle_field(flat.positions, sheared.positions, flat.fibre_ids,
+                                      flat.families, xe, ye)
+    values = field.values[np.isfinite(field.values)]
+    assert values.size == 16
+    assert np.abs(values - shear_deg).max() < 1e-6
+
+
+@pytest.mark.parametrize("shear_deg", [10.0, 40.0])
+def test_shear_angle_on_a_curved_surface_uses_the_tangents(shear_deg):
+    """The sheared sheet bent onto a cylinder (an isometry: angles in the surface keep their
+    size) still shows the imposed angle; its in-plane projection would not."""
+    flat, sheared, (xe, ye) = _sheets(shear_deg)
+    radius = 20e-3
+    x, y, z = sheared.positions.T
+    bent = np.column_stack([(radius - z) * np.sin(x / radius), y,
+                            radius - (radius - z) * np.cos(x / radius)])
+    field = surface_shear_angle_field(flat.positions, bent, flat.fibre_ids, flat.families,
+                                      xe, ye)
+    values = field.values[np.isfinite(field.values)]
+    assert np.abs(values - shear_deg).max() < 0.1  # the bundle's thickness: ~ z/R
+    # the bead values carry their cell's angle
+    assert np.nanmax(np.abs(field.extra["bead_shear_deg"] - shear_deg)) < 0.1
+
+
+def test_shear_angle_sign_does_not_depend_on_fibre_direction():
+    flat, sheared, (xe, ye) = _sheets(20.0)
+    reverse = flat.fibre_ids == flat.fibre_ids.max()  # one weft fibre numbered backwards
+    order = np.arange(flat.n_beads)
+    order[reverse] = order[reverse][::-1]
+    field = surface_shear_angle_field(flat.positions[order], sheared.positions[order],
+                                      flat.fibre_ids, flat.families[order], xe, ye)
+    values = field.values[np.isfinite(field.values)]
+    assert np.abs(values - 20.0).max() < 1e-6
+
+
+def test_contact_angle_of_a_taut_fabric():
+    # die edge level with the punch centre: the fabric leaves the punch at its equator
+    # when the die edge is on the sphere
+    assert math.degrees(contact_angle_rad(10.0, 10.0, 0.0, 0.0)) == pytest.approx(90.0)
+    # shallow: die edge far out, well above the punch's lowest point
+    shallow = contact_angle_rad(50e-3, 53e-3, 45e-3, 1e-3)
+    assert 0 < shallow < math.radians(30)
+
+
+# -- validation before LAMMPS ----------------------------------------------------------------
+@pytest.mark.parametrize("kwargs, message", [
+    ({"depth_m": 0.06}, "drape.depth_m must be <= punch_radius_m"),
+    ({"holder_force_n": -5.0}, "drape.holder_force_n must be > 0"),
+    ({"die_clearance_m": -1e-3}, "drape.die_clearance_m must be >= 0"),
+    ({"symmetry": "half"}, "drape.symmetry must be one of"),
+    ({"modulus_scale": 2.0}, "drape.modulus_scale must be in (0, 1]"),
+    ({"holder_inner_radius_m": 0.04}, "drape.holder_inner_radius_m must be >="),
+])
+def test_bad_input_is_refused_in_one_line(kwargs, message):
+    with pytest.raises(InputError) as err:
+        Drape(**kwargs)
+    assert message in str(err.value)
+    assert "\n" not in str(err.value)
+
+
+def test_a_blank_too_small_for_the_tools_is_refused():
+    from fabmd.model.transform import cut, tile
+
+    blank = cut(tile(plain_weave_cell(), 4, 4, periodic=False), 14e-3, 14e-3)
+    with pytest.raises(InputError, match="must reach past the holder's opening"):
+        Drape(**SMALL).prepare(blank)
+
+
+def test_the_fabric_must_pass_between_punch_and_die():
+    from fabmd.model.transform import cut, tile
+
+    blank = cut(tile(plain_weave_cell(), 7, 7, periodic=False), 26e-3, 26e-3)
+    drape = Drape(**{**SMALL, "depth_m": 5e-3, "die_clearance_m": 0.2e-3})
+    with pytest.raises(InputError, match="raise drape.die_clearance_m"):
+        drape.prepare(blank)
+
+
+def test_cli_refuses_a_bad_drape_in_one_line_before_lammps(tmp_path):
+    from .conftest import run_cli
+
+    scene = tmp_path / "scene.toml"
+    text = (Path(__file__).resolve().parents[1] / "examples" / "drape.toml").read_text()
+    scene.write_text(text.replace('depth_m = "40 mm"', 'depth_m = "60 mm"'))
+    done = run_cli("test", "drape", str(scene), "--out", str(tmp_path / "run"), timeout=120)
+    assert done.returncode != 0
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "drape.depth_m must be <= punch_radius_m" in lines[0]
+    assert not (tmp_path / "run").exists()  # refused before any stage ran
+
+
+def test_scene_table_builds_a_drape_with_units():
+    from fabmd.pipeline import TESTS, build_protocol
+
+    assert "drape" in TESTS
+    drape = build_protocol("drape", {"punch_radius_m": "40 mm", "depth_m": "25 mm",
+                                     "holder_force_n": "50 N", "symmetry": "full",
+                                     "tool": {"friction": 0.15}})
+    assert drape.punch_radius_m == pytest.approx(0.04)
+    assert drape.tool.friction == 0.15
+    with pytest.raises(InputError, match=r"\[drape\] drape.depth_m must be <="):
+        build_protocol("drape", {"punch_radius_m": "40 mm", "depth_m": "45 mm"})
+
+
+# -- the quarter model and its input -----------------------------------------------------------
+@pytest.fixture(scope="module")
+def small_blank(tmp_path_factory):
+    """A 26 mm blank tiled from the crimped tiny plain weave (coarse beads, s/d = 0.9)."""
+    from fabmd.engine import Engine
+    from fabmd.model.transform import cut, tile
+    from fabmd.protocols.crimp import Crimp
+
+    root = tmp_path_factory.mktemp("drape")
+    crimped = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(
+        plain_weave_cell(spacing_ratio=0.9), root / "crimp", engine=Engine(progress=False))
+    return cut(tile(crimped.model, 7, 7, periodic=False), 26e-3, 26e-3)
+
+
+def test_quarter_blank_holds_the_cut_fibre_ends_on_the_symmetry_planes(small_blank):
+    drape = Drape(**SMALL)
+    quarter = drape.prepare(small_blank)
+    full = Drape(**{**SMALL, "symmetry": "full"}).prepare(small_blank)
+    p = quarter.positions
+    assert (p[:, 0] > 0).all() and (p[:, 1] > 0).all()
+    assert 3.5 < full.n_beads / quarter.n_beads < 4.5
+    g = drape.geometry(quarter)
+    ends = np.unique(quarter.fibre_ends().ravel())
+    assert set(g.sym_x) <= set(ends.tolist()) and g.sym_x and g.sym_y
+    # warp ends (fibres along x) on x = 0, weft ends on y = 0
+    assert set(quarter.families[list(g.sym_x)]) == {"warp"}
+    assert set(quarter.families[list(g.sym_y)]) == {"weft"}
+    # no yarn on a symmetry plane: the planes run between yarns
+    d = quarter.diameters.max()
+    assert (np.abs(full.positions[full.families == "weft", 0]) > 0.5 * d).all()
+    text = drape.input_text(quarter)
+    for line in ("region          punch sphere", "region          die cone",
+                 "region          die_wall cylinder",
+                 "fix             sym_x sym_x setforce 0.0 NULL NULL",
+                 "fix             holder_control all controller", "wall/gran/region granular"):
+        assert line in text
+
+
+@pytest.mark.lammps
+def test_blank_holder_force_holds_its_set_value(small_blank, tmp_path):
+    from fabmd.engine import Engine
+
+    drape = Drape(**SMALL, trajectory=__import__("fabmd.scene.outputs", fromlist=["x"])
+                  .TrajectoryOutput(frames=2, paraview=False))
+    result = drape.run(small_blank, tmp_path / "drape", engine=Engine(progress=False))
+    s = result.summary
+    holder = s["holder_force"]
+    assert holder["max_relative_error"] < 0.10, holder
+    assert abs(holder["mean_force_n"] - 20.0) < 0.5
+    assert s["max_punch_force_n"] > 0 and s["max_shear_angle_deg"] > 1.0
+    assert s["energy_balance"]["relative_error"] < 0.05
+    for name in ("curve.csv", "summary.json", "curve.png", "shear_angle.png",
+                 "shear_angle.csv", "shear_angle.npz", "final.vtu", "shape.png",
+                 "trajectory.h5"):
+        assert (result.run_dir / name).exists(), name
+
+
+@pytest.mark.lammps
+@pytest.mark.slow
+def test_quarter_and_full_model_agree(tmp_path):
+    """A 56 mm blank of the tiny plain weave under a 12 mm punch, 7.5 mm deep (about 75 s:
+    the full model has 7000 beads): punch force and largest shear angle within 5 %."""
+    from fabmd.engine import Engine
+    from fabmd.model.transform import cut, tile
+    from fabmd.protocols.crimp import Crimp
+    from fabmd.scene.outputs import TrajectoryOutput
+
+    crimped = Crimp(expansion={"warp": -0.1, "weft": -0.1}).run(
+        plain_weave_cell(spacing_ratio=0.9), tmp_path / "crimp", engine=Engine(progress=False))
+    blank = cut(tile(crimped.model, 15, 15, periodic=False), 56e-3, 56e-3)
+    case = {"punch_radius_m": 12e-3, "depth_m": 7.5e-3, "die_clearance_m": 1.5e-3,
+            "holder_force_n": 40.0, "speed_fraction": 2e-3,
+            "trajectory": TrajectoryOutput(frames=0)}
+    result = {}
+    for symmetry in ("quarter", "full"):
+        run = Drape(**case, symmetry=symmetry).run(blank, tmp_path / symmetry,
+                                                   engine=Engine(progress=False))
+        result[symmetry] = run.summary
+    q, f = result["quarter"], result["full"]
+    assert 3.5 < f["n_beads"] / q["n_beads"] < 4.5
+    for key in ("max_punch_force_n", "final_punch_force_n", "max_shear_angle_deg"):
+        assert abs(q[key] - f[key]) / f[key] < 0.05, (key, q[key], f[key])
+    assert abs(q["draw_in"]["warp_m"] - f["draw_in"]["warp_m"]) < 0.1 * f["draw_in"]["warp_m"]
