@@ -255,9 +255,9 @@ class Drape(DrivenTest):
 
     def check_orientation(self, model: BeadModel) -> None:
         """Warp along x and weft along y (within 15°), both present."""
-        from ..results.fibre_angles import family_axes_deg
+        from ..analysis import FabricFrame, family_axes_deg
 
-        axes = family_axes_deg(model, model.positions)
+        axes = family_axes_deg(FabricFrame.from_model(model))
         for fam, want in (("warp", 0.0), ("weft", 90.0)):
             got = axes.get(fam)
             if got is None:
