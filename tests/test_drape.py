@@ -177,6 +177,21 @@ def test_quarter_blank_holds_the_cut_fibre_ends_on_the_symmetry_planes(small_bla
         assert line in text
 
 
+def test_tool_zones_skip_only_beads_that_cannot_reach_the_tools(small_blank):
+    near = Drape(**SMALL)
+    model = near.prepare(small_blank)
+    g = near.geometry(model)
+    r = np.hypot(model.positions[:, 0], model.positions[:, 1])
+    zones = near.reach(g)
+    assert 0 < (r <= zones["punch_reach"]).sum() < len(r)  # the skip skips something
+    # a bead outside the punch zone cannot reach the punch: its arc at full depth
+    assert zones["punch_reach"] > SMALL["punch_radius_m"] * np.arccos(
+        1 - SMALL["depth_m"] / SMALL["punch_radius_m"])
+    every = Drape(**SMALL, tool_zones=False).reach(g)
+    assert (r <= every["punch_reach"]).all() and (r >= every["die_reach"]).all()
+    assert (r <= every["flange_reach"]).all()
+
+
 @pytest.mark.lammps
 def test_blank_holder_force_holds_its_set_value(small_blank, tmp_path):
     from fabmd.engine import Engine

@@ -178,6 +178,9 @@ class Drape(DrivenTest):
             summary reports the largest bond strain); a softer fibre takes a longer stable
             time step (∝ 1/sqrt(scale)), so the same punch speed needs fewer steps. Contact
             stiffness follows (it is a fraction of the fibres' E·A/l0).
+        tool_zones: give each tool's contact only to the beads that can reach it
+            (default True); False gives punch and die contact to every bead, which changes
+            nothing but the cost (``benchmarks/drape.py`` measures both).
     """
 
     punch_radius_m: float = 0.05
@@ -200,6 +203,7 @@ class Drape(DrivenTest):
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_depths_m: tuple[float, ...] = ()
     modulus_scale: float = 1.0
+    tool_zones: bool = True
 
     protocol: ClassVar[str] = PROTOCOL
     rate_curve: ClassVar[tuple[str, str]] = ("depth_m", "punch_force_n")
@@ -494,6 +498,16 @@ class Drape(DrivenTest):
             lines.append(f"fix             {name} {name} setforce {comps}")
         return "\n".join(lines)
 
+    def reach(self, g: DrapeGeometry) -> dict[str, float]:
+        """Radii of the punch, die and die-wall contact zones [m]; without ``tool_zones``
+        every bead gets punch, die and die-wall contact (the holder's zone stays: it also
+        defines the beads whose force is the holder force)."""
+        if self.tool_zones:
+            return {"punch_reach": g.punch_reach_m, "die_reach": g.die_reach_m,
+                    "flange_reach": g.flange_reach_m}
+        return {"punch_reach": g.face_radius_m, "die_reach": 1e-3 * g.diameter_m,
+                "flange_reach": g.face_radius_m}
+
     def input_text(self, model: BeadModel) -> str:
         g = self._geometry_of(model)
         dt = self.time_step_s(model)
@@ -509,11 +523,11 @@ class Drape(DrivenTest):
         text = render(
             "drape", symmetry=self.symmetry, radius=g.radius_m, punch_z=g.punch_z_m,
             z_die=g.z_die_m, die_radius=g.die_radius_m, holder_radius=g.holder_radius_m,
-            flange_reach=g.flange_reach_m, die_wall_gap=0.5 * g.diameter_m,
+            die_wall_gap=0.5 * g.diameter_m,
             face_radius=g.face_radius_m, z_face_top=g.z_die_m + 1e-6 * g.face_radius_m,
             wall_lo=g.z_die_m - 2 * g.radius_m, wall_hi=g.z_die_m - 0.5 * g.diameter_m,
-            holder_force=self.holder_share_n(g), punch_reach=g.punch_reach_m,
-            die_reach=g.die_reach_m, z_holder=g.z_holder_m, walls=walls,
+            holder_force=self.holder_share_n(g), z_holder=g.z_holder_m, walls=walls,
+            **self.reach(g),
             holder_gain=control["gain_m_s_n"], symmetry_fixes=self.symmetry_fixes(g),
             holder_ki=1.0 / control["integral_time_s"],
             guards=blocks.guards(model, dt),
@@ -794,14 +808,16 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
                 "punch, so KE/W overstates the dynamic part where the punch force is small"}
     rest = np.array([bt.rest_length_m for bt in model.bond_type_table])[model.bond_types - 1]
     strain = final.bond_lengths() / rest - 1.0
+    reach = test.reach(g)
     summary = {
         "protocol": PROTOCOL,
         "symmetry": test.symmetry,
         "n_beads": model.n_beads,
         "n_beads_in_tool_zones": {
-            "punch": int((r0 <= g.punch_reach_m).sum()),
-            "die": int((r0 >= g.die_reach_m).sum()),
-            "die_wall": int(((r0 >= g.die_reach_m) & (r0 <= g.flange_reach_m)).sum()),
+            "punch": int((r0 <= reach["punch_reach"]).sum()),
+            "die": int((r0 >= reach["die_reach"]).sum()),
+            "die_wall": int(((r0 >= reach["die_reach"])
+                             & (r0 <= reach["flange_reach"])).sum()),
             "holder": int((r0 > g.holder_radius_m).sum())},
         "symmetry_held_beads": {"x": len(g.sym_x), "y": len(g.sym_y)},
         "punch_radius_m": g.radius_m,
