@@ -105,6 +105,8 @@ def main(argv=None) -> int:
                         "for every bead, not only near the tools)")
     p.add_argument("--out", type=Path, default=None, help="keep the run folders here")
     p.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
+    p.add_argument("--section", default="Drape",
+                   help="RESULTS.md section to write (one per case)")
     args = p.parse_args(argv)
     root = args.out or Path(tempfile.mkdtemp(prefix="drape-bench-"))
     rows = []
@@ -138,7 +140,7 @@ def main(argv=None) -> int:
                 f"{args.clearance_mm:g} mm, blank {args.blank_mm:g} mm square, holder "
                 f"{args.holder_n:g} N; the example's yarns, contact, modulus scale and punch "
                 f"speed. Differences are relative to the first row.\n\n")
-        update_section("Drape", note + text, command.strip())
+        update_section(args.section, note + text, command.strip())
     return 0
 
 

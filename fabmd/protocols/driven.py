@@ -44,7 +44,7 @@ from ..scene import blocks
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
-from .common import RunResult, input_name, resume_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
 
 
 @dataclass
@@ -136,6 +136,19 @@ class DrivenTest:
         """Viscous damping coefficient γ = m/τ [kg/s] (τ default: a tenth of the test)."""
         tau = self.damping_time_s or self.duration_s(model) / 10
         return float(np.median(model.masses)) / tau
+
+    def scene_text(self, model: BeadModel, dt: float, protocol_text: str, *after: str) -> str:
+        """The whole input: set-up, bonds, contact, the test's own text and the contact-power
+        sampling (energy balance), then ``after`` (outputs, guards, run, finish)."""
+        beads = model_bead_parameters(model)
+        return "\n".join([
+            blocks.setup(model, self.protocol, DATA_FILE, dt),
+            blocks.bonds(model),
+            blocks.contact(model, self.contact, beads),
+            protocol_text,
+            ContactPower.commands(),
+            *after,
+        ])
 
     def trajectory_block(self, model: BeadModel) -> str:
         """Outputs block of the trajectory (``self.trajectory``): about ``frames`` frames

@@ -33,7 +33,7 @@ import numpy as np
 from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from ..model.beads import TimeStep, model_bead_parameters
+from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
 from ..scene import blocks
@@ -41,7 +41,6 @@ from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
-from .common import DATA_FILE
 from .driven import (
     DrivenResult,
     DrivenTest,
@@ -88,7 +87,6 @@ class _PeriodicCellTest(DrivenTest):
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
         dt = self.time_step_s(model)
-        beads = model_bead_parameters(model)
         ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
         outputs = self.outputs_block(
             model, "# power of the box deformation: v_p_box (above)", "v_p_box",
@@ -102,18 +100,13 @@ class _PeriodicCellTest(DrivenTest):
                       box_motion=self.box_motion(model),
                       transverse=self.transverse_block(model), gamma=self.gamma(model),
                       outputs=outputs)
-        return "\n".join([
-            blocks.setup(model, self.protocol, DATA_FILE, dt),
-            blocks.bonds(model),
-            blocks.contact(model, self.contact, beads),
-            text,
-            ContactPower.commands(),
+        return self.scene_text(
+            model, dt, text,
             self.trajectory_block(model),
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
             self.trajectory.final_commands(),
-            render("finish", final_data="final.data"),
-        ])
+            render("finish", final_data="final.data"))
 
     def _schedule(self, model: BeadModel) -> str:
         load = self.loading(model)

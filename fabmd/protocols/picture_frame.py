@@ -44,7 +44,6 @@ from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
-from .common import DATA_FILE
 from .driven import (
     DrivenResult,
     DrivenTest,
@@ -296,7 +295,6 @@ class PictureFrame(DrivenTest):
         g = self.frame(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        beads = model_bead_parameters(model)
         ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
@@ -311,18 +309,13 @@ class PictureFrame(DrivenTest):
                       displacement_next=load.lammps_displacement("t_next"),
                       velocity_next=load.lammps_velocity("t_next"),
                       gamma=self.gamma(model), outputs=outputs)
-        return "\n".join([
-            blocks.setup(model, PROTOCOL, DATA_FILE, dt),
-            blocks.bonds(model),
-            blocks.contact(model, self.contact, beads),
-            text,
-            ContactPower.commands(),
+        return self.scene_text(
+            model, dt, text,
             self.trajectory_block(model),
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
             self.trajectory.final_commands(),
-            render("finish", final_data="final.data"),
-        ])
+            render("finish", final_data="final.data"))
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:

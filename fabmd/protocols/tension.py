@@ -20,7 +20,7 @@ import numpy as np
 from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from ..model.beads import TimeStep, model_bead_parameters
+from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
 from ..scene import blocks
@@ -28,7 +28,6 @@ from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
-from .common import DATA_FILE
 from .driven import (
     STARTED_NOTE,
     DrivenResult,
@@ -122,7 +121,6 @@ class Tension(DrivenTest):
         left, right, _ = self.clamps(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        beads = model_bead_parameters(model)
         ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
         ref_force *= 1e-3 * self.max_elongation_pct
         power, power_ref = clamp_power("clamps")
@@ -134,19 +132,14 @@ class Tension(DrivenTest):
                       relax=self.relax_block(model, "clamps", "free", ref_force),
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
                       gamma=self.gamma(model), outputs=outputs)
-        return "\n".join([
-            blocks.setup(model, PROTOCOL, DATA_FILE, dt),
-            blocks.bonds(model),
-            blocks.contact(model, self.contact, beads),
-            text,
-            ContactPower.commands(),
+        return self.scene_text(
+            model, dt, text,
             self.trajectory_block(model),
             extra,
             blocks.guards(model, dt),
             render("run", steps=self.steps(model)),
             self.trajectory.final_commands(),
-            render("finish", final_data="final.data"),
-        ])
+            render("finish", final_data="final.data"))
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> TensionResult:
