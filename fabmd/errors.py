@@ -72,3 +72,8 @@ class UnstableRun(SimulationFailed):
 
 class OverlapWarning(UserWarning):
     """A run saw overlaps above ``ContactModel.overlap_warning`` (results may be too soft)."""
+
+
+class QuasiStaticWarning(UserWarning):
+    """A driven test was not quasi-static: inertia or drag carry a large part of its
+    force (see the summary's ``quasi_static``); slow it down before using the curve."""

@@ -59,3 +59,44 @@ def test_unstable_tension_writes_no_curve(tmp_path, woven_coupon):
     with pytest.raises(UnstableRun) as err:
         test.run(woven_coupon.model, tmp_path / "run", engine=Engine(progress=False))
     assert_caught_without_curve(err, tmp_path / "run")
+
+
+def test_quasi_static_verdict_names_what_is_too_large():
+    from fabmd.protocols.driven import QUASI_STATIC_LIMITS, quasi_static_verdict
+
+    calm = {"max_kinetic_to_strain_energy": 0.02, "max_kinetic_to_external_work": None,
+            "energy_balance": {"external_work_j": 1.0, "damping_dissipation_j": 0.1}}
+    assert quasi_static_verdict(calm)["ok"]
+    assert quasi_static_verdict(calm)["values"]["damping_share"] == pytest.approx(0.1)
+    dragged = {**calm, "energy_balance": {"external_work_j": 1.0, "damping_dissipation_j": 0.9}}
+    verdict = quasi_static_verdict(dragged)
+    assert not verdict["ok"] and verdict["problems"] == ["damping_share = 0.9 > 0.5"]
+    shaking = {**calm, "max_kinetic_to_strain_energy": 2.0}
+    assert "max_kinetic_to_strain_energy = 2 > 0.1" in quasi_static_verdict(shaking)["problems"]
+    assert quasi_static_verdict(shaking, {"damping_share": 0.5})["ok"]  # a test's own limits
+    leaking = {**calm, "energy_balance": {"external_work_j": -1e-4,
+                                          "damping_dissipation_j": 0.04, "relative_error": 5.2}}
+    verdict = quasi_static_verdict(leaking)  # a specimen springing apart: work < 0
+    assert verdict["problems"] == ["energy_balance_error = 5.2 > 0.05"]
+    assert set(QUASI_STATIC_LIMITS) >= {"max_kinetic_to_strain_energy", "damping_share"}
+
+
+@pytest.mark.lammps
+def test_a_tension_pulled_too_fast_is_flagged_not_quasi_static(tmp_path, woven_coupon):
+    """Default speed: quasi-static; 200 x faster: the summary and a warning say it is not."""
+    from fabmd.engine import Engine
+    from fabmd.errors import QuasiStaticWarning
+    from fabmd.protocols.tension import Tension
+    from fabmd.scene.outputs import TrajectoryOutput
+
+    quiet = TrajectoryOutput(frames=0)
+    slow = Tension(trajectory=quiet).run(woven_coupon.model, tmp_path / "slow",
+                                         engine=Engine(progress=False))
+    assert slow.summary["quasi_static"]["ok"], slow.summary["quasi_static"]
+    with pytest.warns(QuasiStaticWarning, match="not quasi-static"):
+        fast = Tension(speed_fraction=2e-2, trajectory=quiet).run(
+            woven_coupon.model, tmp_path / "fast", engine=Engine(progress=False))
+    assert not fast.summary["quasi_static"]["ok"]
+    saved = json.loads((fast.run_dir / "summary.json").read_text())
+    assert saved["quasi_static"]["problems"]
+    assert all(spec["title"].startswith("NOT QUASI-STATIC") for spec in fast.plots)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
@@ -33,7 +34,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..engine import Engine, mpi
-from ..errors import SimulationFailed
+from ..errors import QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import model_bead_parameters
 from ..results.curves import curve_difference
@@ -45,6 +46,15 @@ from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
+
+#: above these a driven test's curve is not quasi-static (after start-up): kinetic over
+#: strain energy and over the work done (inertia; KE/U = 0.1 moved the tension force at 1 %
+#: by about 1 %, benchmarks/stability.py "Loading speed"), and the share of the work the
+#: viscous drag took (a force that grows with the loading speed); and the energy balance's
+#: closing error (work that went somewhere no term accounts for)
+QUASI_STATIC_LIMITS = {"max_kinetic_to_strain_energy": 0.1,
+                       "max_kinetic_to_external_work": 0.1, "damping_share": 0.5,
+                       "energy_balance_error": 0.05}
 
 
 @dataclass
@@ -75,6 +85,8 @@ class DrivenTest:
     protocol: ClassVar[str] = ""
     rate_curve: ClassVar[tuple[str, str]] = ("", "")
     rate_keys: ClassVar[dict[str, str]] = {}
+    #: the quasi-static measures judged after the run (summary key -> largest allowed)
+    quasi_static_limits: ClassVar[dict[str, float]] = QUASI_STATIC_LIMITS
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -210,6 +222,16 @@ class DrivenTest:
             result = self.reduce(run_dir, start, monitor)
             result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
                                   trajectory=trajectory.name if trajectory else None)
+            verdict = quasi_static_verdict(result.summary, self.quasi_static_limits)
+            result.summary["quasi_static"] = verdict
+            if not verdict["ok"]:
+                for spec in getattr(result, "plots", []):  # no plot that looks valid
+                    spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
+                    spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"]])
+                warnings.warn(f"{self.protocol} in {run_dir}: not quasi-static "
+                              f"({'; '.join(verdict['problems'])}): do not use the curve; "
+                              f"lower speed_fraction (inertia, drag) or check the specimen "
+                              f"holds together", QuasiStaticWarning, stacklevel=2)
         if check_rate:
             slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
             other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
@@ -235,6 +257,30 @@ class DrivenTest:
         if "wall_s" in slow.summary:
             report["half_speed_wall_s"] = slow.summary["wall_s"]
         return report
+
+
+def damping_share(summary: dict) -> float | None:
+    """Share of the external work the viscous drag dissipated."""
+    balance_ = summary.get("energy_balance") or {}
+    work, drag = balance_.get("external_work_j"), balance_.get("damping_dissipation_j")
+    return drag / work if work and drag is not None and work > 0 else None
+
+
+def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) -> dict:
+    """Is the curve quasi-static, and does its energy balance close? Each measure in
+    ``limits`` (default
+    :data:`QUASI_STATIC_LIMITS`) is read from the summary (``damping_share`` computed from
+    its energy balance); a measure the test does not report is not judged."""
+    limits = QUASI_STATIC_LIMITS if limits is None else limits
+    derived = {"damping_share": lambda: damping_share(summary),
+               "energy_balance_error": lambda: (summary.get("energy_balance") or {}).get(
+                   "relative_error")}
+    values = {name: derived[name]() if name in derived else summary.get(name)
+              for name in limits}
+    problems = [f"{name} = {v:.2g} > {limits[name]:g}" for name, v in values.items()
+                if v is not None and v > limits[name]]
+    return {"ok": not problems, "values": values, "limits": dict(limits),
+            "problems": problems}
 
 
 def relative_change(a, b) -> float | None:
