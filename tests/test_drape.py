@@ -237,3 +237,24 @@ def test_quarter_and_full_model_agree(tmp_path):
     for key in ("max_punch_force_n", "final_punch_force_n", "max_shear_angle_deg"):
         assert abs(q[key] - f[key]) / f[key] < 0.05, (key, q[key], f[key])
     assert abs(q["draw_in"]["warp_m"] - f["draw_in"]["warp_m"]) < 0.1 * f["draw_in"]["warp_m"]
+
+
+def test_blank_shear_of_a_sheared_turned_and_drawn_blank():
+    """The whole-blank shear is the imposed in-plane shear; a rigid turn or a pure draw-in
+    gives none."""
+    from fabmd.protocols.drape import DrapeGeometry, blank_shear_deg
+
+    xs = np.linspace(-0.05, 0.05, 21)
+    ref = np.array([(x, y, 0.0) for x in xs for y in xs])
+    g = DrapeGeometry(quarter=False, radius_m=0.02, die_radius_m=0.023, holder_radius_m=0.023,
+                      z_die_m=0.0, z_holder_m=0.0, punch_z_m=0.0, gap_m=0.0, thickness_m=1e-3,
+                      spacing_m=5e-3, half_size_m=(0.05, 0.05), punch_reach_m=0.03,
+                      die_reach_m=0.02, contact_angle_rad=1.0, flange_reach_m=0.04,
+                      face_radius_m=0.2, diameter_m=1e-3, sym_x=(), sym_y=())
+    k = 0.01  # u = k·(y, x): engineering shear 2k
+    sheared = ref + k * ref[:, [1, 0, 2]] * np.array([1.0, 1.0, 0.0])
+    assert blank_shear_deg(ref, sheared, g) == pytest.approx(np.degrees(2 * k), rel=1e-9)
+    a = np.radians(1.0)
+    turned = ref @ np.array([[np.cos(a), np.sin(a), 0], [-np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    assert abs(blank_shear_deg(ref, turned, g)) < 1e-9
+    assert abs(blank_shear_deg(ref, ref * np.array([0.9, 0.9, 1.0]), g)) < 1e-12

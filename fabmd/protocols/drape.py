@@ -648,7 +648,25 @@ def draw_in(reference: np.ndarray, final: np.ndarray, g: DrapeGeometry) -> dict:
     result["note"] = ("in-plane displacement of the edge beads towards the centre, within a "
                       "yarn spacing of the edge point along x (warp), y (weft) and the corner "
                       "(diagonal)")
+    result["blank_shear_deg"] = None if g.quarter else blank_shear_deg(reference, final, g)
     return result
+
+
+def blank_shear_deg(reference: np.ndarray, final: np.ndarray, g: DrapeGeometry) -> float:
+    """Engineering shear of the whole blank in its plane, from its edges [deg]:
+    mean(sign(x)·u_y)/hx over the two edges across x plus mean(sign(y)·u_x)/hy over the two
+    across y (corners left out). A rigid turn and a pure draw-in give 0. Zero by
+    construction in the quarter model, whose mirror planes forbid it; non-zero in the full
+    model, it is a mode the quarter model cannot show."""
+    hx, hy = g.half_size_m
+    s = g.spacing_m
+    x, y = reference[:, 0], reference[:, 1]
+    u = final[:, :2] - reference[:, :2]
+    across_x = (np.abs(x) > hx - s) & (np.abs(y) < hy - s)
+    across_y = (np.abs(y) > hy - s) & (np.abs(x) < hx - s)
+    shear = (np.mean(np.sign(x[across_x]) * u[across_x, 1]) / hx
+             + np.mean(np.sign(y[across_y]) * u[across_y, 0]) / hy)
+    return float(np.degrees(shear))
 
 
 def merged_overlap(run_dir: Path, contact: ContactModel) -> dict:
