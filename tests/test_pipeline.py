@@ -6,7 +6,7 @@ import pytest
 
 from fabmd.errors import InputError
 from fabmd.pipeline import coupon_stage, crimp_stage, protocol_stage, run_test
-from fabmd.scenefile import parse_scene
+from fabmd.scenefile import load_scene, parse_scene
 
 from .conftest import run_cli
 
@@ -118,6 +118,27 @@ def test_presets_change_discretisation_and_speed_only():
     assert fast.model().n_beads < scene.model().n_beads < accurate.model().n_beads
     with pytest.raises(InputError, match="preset must be one of"):
         apply_preset(scene, "sloppy")
+
+
+def test_presets_never_make_a_scene_costlier_or_coarser_than_meant():
+    """--fast keeps a scene that is already coarser (the drape example: one fibre, s/d 0.9);
+    --accurate keeps one that is already finer."""
+    import tomllib
+
+    from fabmd.examples_dir import example_scene
+    from fabmd.presets import apply_preset, resolution
+
+    drape = load_scene(example_scene("drape.toml"))
+    fast = apply_preset(drape, "fast")
+    assert fast.discretisation.spacing_ratio == drape.discretisation.spacing_ratio == 0.9
+    assert fast.fabric.warp.n_fibres == 1
+    plain = load_scene(example_scene("plain_weave.toml"))
+    assert resolution(1, 0.25) < resolution(plain.fabric.warp.n_fibres,
+                                            plain.discretisation.spacing_ratio)
+    assert apply_preset(plain, "fast").discretisation.spacing_ratio == 0.25
+    fine = parse_scene(tomllib.loads(TINY.replace("n_fibres = 1", "n_fibres = 37")))
+    accurate = apply_preset(fine, "accurate")
+    assert accurate.fabric.warp.n_fibres == 37
 
 
 def test_preset_speed_factor_scales_every_driven_test(monkeypatch):
