@@ -50,6 +50,10 @@ class Coupon:
         trajectory: trajectory frames of the relaxation (``trajectory.h5``, ParaView
             files; spread over a quarter of ``relax.max_steps``, the relaxed state the last
             frame); default none.
+        bending_set_factor: give the cut fibres bending stiffness with their as-woven
+            shape as rest shape, this fraction of the solid virtual fibre's E·I, before the
+            relaxation (0, default: none; :mod:`fabmd.model.bending`). Bead chains without
+            bending straighten once cut free: a 45° coupon then falls apart.
     """
 
     length_m: float
@@ -61,6 +65,7 @@ class Coupon:
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=0))
+    bending_set_factor: float = 0.0
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -71,6 +76,7 @@ class Coupon:
             inputs.positive_int("coupon.tile[0]", self.tile[0])
             inputs.positive_int("coupon.tile[1]", self.tile[1])
         check_trajectory("coupon.trajectory", self.trajectory)
+        inputs.in_range("coupon.bending_set_factor", self.bending_set_factor, 0.0, 1.0)
 
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
@@ -92,8 +98,13 @@ class Coupon:
         elif any(fabric.periodic):
             raise InputError("a fabric periodic in one direction only cannot be cut; "
                              "use a fully periodic cell or a finite piece")
-        return cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
-                   edge_zone_m=self.edge_zone_m)
+        coupon = cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
+                     edge_zone_m=self.edge_zone_m)
+        if self.bending_set_factor > 0:
+            from ..model.bending import set_bending
+
+            coupon = set_bending(coupon, self.bending_set_factor)
+        return coupon
 
     def input_text(self, model: BeadModel) -> str:
         beads = model_bead_parameters(model)
