@@ -39,7 +39,7 @@ from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..scene.energy import ContactPower
-from ..scene.outputs import TrajectoryOutput, check_trajectory
+from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
 from .driven import (
     DrivenResult,
@@ -119,13 +119,7 @@ class BiasExtension(DrivenTest):
             inputs.positive("bias_extension.clamp_length_m", self.clamp_length_m)
         inputs.in_range("bias_extension.central_zone_fraction", self.central_zone_fraction,
                         0, 0.5, low_open=True)
-        inputs.in_range("bias_extension.speed_fraction", self.speed_fraction, 0, 0.05,
-                        low_open=True)
-        inputs.in_range("bias_extension.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive("bias_extension.damping_time_s", self.damping_time_s)
-        inputs.positive_int("bias_extension.samples", self.samples, minimum=10)
-        check_trajectory("bias_extension.trajectory", self.trajectory)
+        self.check_loading()
 
     # -- geometry ---------------------------------------------------------------------
     def width_m(self, model: BeadModel) -> float:

@@ -547,12 +547,10 @@ class Drape(DrivenTest):
             samples_per_interval=self.every(model) // SAMPLE_EVERY, every=self.every(model),
             strain_energy="ebond+eangle" if len(model.angles) else "ebond",
             thermo_every=max(self.every(model), steps // 20))
-        return self.scene_text(
-            model, dt, text,
-            self.trajectory.commands(steps),
-            render("run", steps=steps),
-            self.trajectory.final_commands(),
-            render("finish", final_data="final.data"))
+        # the drape's guards sit in its template (before the clamping phase)
+        return self.scene_text(model, dt, text, after=(
+            self.trajectory.commands(steps), render("run", steps=steps),
+            self.trajectory.final_commands(), render("finish", final_data="final.data")))
 
     # -- run ------------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,

@@ -33,6 +33,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from .. import inputs
 from ..engine import Engine, mpi
 from ..errors import QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
@@ -44,6 +45,7 @@ from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
+from ..scene.outputs import check_trajectory
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
 
@@ -149,10 +151,28 @@ class DrivenTest:
         tau = self.damping_time_s or self.duration_s(model) / 10
         return float(np.median(model.masses)) / tau
 
-    def scene_text(self, model: BeadModel, dt: float, protocol_text: str, *after: str) -> str:
+    def check_loading(self) -> None:
+        """Validate the fields every driven test has (speed, ramp, damping time, samples,
+        trajectory); errors name ``<protocol>.<field>``."""
+        name = self.protocol
+        inputs.in_range(f"{name}.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
+        inputs.in_range(f"{name}.ramp_fraction", self.ramp_fraction, 0, 0.9)
+        if self.damping_time_s is not None:
+            inputs.positive(f"{name}.damping_time_s", self.damping_time_s)
+        inputs.positive_int(f"{name}.samples", self.samples, minimum=10)
+        check_trajectory(f"{name}.trajectory", self.trajectory)
+
+    def scene_text(self, model: BeadModel, dt: float, protocol_text: str, *extra: str,
+                   after: tuple[str, ...] | None = None) -> str:
         """The whole input: set-up, bonds, contact, the test's own text and the contact-power
-        sampling (energy balance), then ``after`` (outputs, guards, run, finish)."""
+        sampling (energy balance), then ``after``; by default the trajectory outputs,
+        ``extra``, the guards, the run and the final data file."""
         beads = model_bead_parameters(model)
+        if after is None:
+            after = (self.trajectory_block(model), *extra, blocks.guards(model, dt),
+                     render("run", steps=self.steps(model)),
+                     self.trajectory.final_commands(),
+                     render("finish", final_data="final.data"))
         return "\n".join([
             blocks.setup(model, self.protocol, DATA_FILE, dt),
             blocks.bonds(model),

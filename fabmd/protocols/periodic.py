@@ -36,9 +36,8 @@ from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
-from ..scene import blocks
 from ..scene.energy import ContactPower
-from ..scene.outputs import TrajectoryOutput, check_trajectory
+from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
 from .driven import (
@@ -100,13 +99,7 @@ class _PeriodicCellTest(DrivenTest):
                       box_motion=self.box_motion(model),
                       transverse=self.transverse_block(model), gamma=self.gamma(model),
                       outputs=outputs)
-        return self.scene_text(
-            model, dt, text,
-            self.trajectory_block(model),
-            blocks.guards(model, dt),
-            render("run", steps=self.steps(model)),
-            self.trajectory.final_commands(),
-            render("finish", final_data="final.data"))
+        return self.scene_text(model, dt, text)
 
     def _schedule(self, model: BeadModel) -> str:
         load = self.loading(model)
@@ -173,13 +166,7 @@ class PeriodicTension(_PeriodicCellTest):
         inputs.one_of("periodic_tension.transverse", self.transverse, TRANSVERSE)
         inputs.in_range("periodic_tension.transverse_damping_fraction",
                         self.transverse_damping_fraction, 0, 1, low_open=True)
-        inputs.in_range("periodic_tension.speed_fraction", self.speed_fraction, 0, 0.05,
-                        low_open=True)
-        inputs.in_range("periodic_tension.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive("periodic_tension.damping_time_s", self.damping_time_s)
-        inputs.positive_int("periodic_tension.samples", self.samples, minimum=10)
-        check_trajectory("periodic_tension.trajectory", self.trajectory)
+        self.check_loading()
 
     def travel_m(self, model: BeadModel) -> float:
         return self.cell(model)[0] * self.max_strain_pct / 100
@@ -291,13 +278,7 @@ class PeriodicShear(_PeriodicCellTest):
     def __post_init__(self):
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
                         low_open=True)
-        inputs.in_range("periodic_shear.speed_fraction", self.speed_fraction, 0, 0.05,
-                        low_open=True)
-        inputs.in_range("periodic_shear.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive("periodic_shear.damping_time_s", self.damping_time_s)
-        inputs.positive_int("periodic_shear.samples", self.samples, minimum=10)
-        check_trajectory("periodic_shear.trajectory", self.trajectory)
+        self.check_loading()
 
     def travel_m(self, model: BeadModel) -> float:
         """Arc the turning edge's end travels, b·γ [m]."""

@@ -39,9 +39,8 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..results.curves import tangent_intersection, values_at
 from ..results.fibre_angles import fibre_shear_angles
-from ..scene import blocks
 from ..scene.energy import ContactPower
-from ..scene.outputs import TrajectoryOutput, check_trajectory
+from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
 from .driven import (
@@ -166,13 +165,7 @@ class PictureFrame(DrivenTest):
         inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, 0, 0.05,
                         high_open=True)
         inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
-        inputs.in_range("picture_frame.speed_fraction", self.speed_fraction, 0, 0.05,
-                        low_open=True)
-        inputs.in_range("picture_frame.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive("picture_frame.damping_time_s", self.damping_time_s)
-        inputs.positive_int("picture_frame.samples", self.samples, minimum=10)
-        check_trajectory("picture_frame.trajectory", self.trajectory)
+        self.check_loading()
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
 
@@ -309,13 +302,7 @@ class PictureFrame(DrivenTest):
                       displacement_next=load.lammps_displacement("t_next"),
                       velocity_next=load.lammps_velocity("t_next"),
                       gamma=self.gamma(model), outputs=outputs)
-        return self.scene_text(
-            model, dt, text,
-            self.trajectory_block(model),
-            blocks.guards(model, dt),
-            render("run", steps=self.steps(model)),
-            self.trajectory.final_commands(),
-            render("finish", final_data="final.data"))
+        return self.scene_text(model, dt, text)
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:

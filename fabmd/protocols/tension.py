@@ -23,9 +23,8 @@ from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
-from ..scene import blocks
 from ..scene.energy import ContactPower
-from ..scene.outputs import TrajectoryOutput, check_trajectory
+from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
 from .driven import (
@@ -84,12 +83,7 @@ class Tension(DrivenTest):
                         low_open=True)
         if self.clamp_length_m is not None:
             inputs.positive("tension.clamp_length_m", self.clamp_length_m)
-        inputs.in_range("tension.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
-        inputs.in_range("tension.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive("tension.damping_time_s", self.damping_time_s)
-        inputs.positive_int("tension.samples", self.samples, minimum=10)
-        check_trajectory("tension.trajectory", self.trajectory)
+        self.check_loading()
 
     # -- geometry of the coupon --------------------------------------------------------
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
@@ -132,14 +126,7 @@ class Tension(DrivenTest):
                       relax=self.relax_block(model, "clamps", "free", ref_force),
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
                       gamma=self.gamma(model), outputs=outputs)
-        return self.scene_text(
-            model, dt, text,
-            self.trajectory_block(model),
-            extra,
-            blocks.guards(model, dt),
-            render("run", steps=self.steps(model)),
-            self.trajectory.final_commands(),
-            render("finish", final_data="final.data"))
+        return self.scene_text(model, dt, text, extra)
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> TensionResult:
