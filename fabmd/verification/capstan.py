@@ -13,6 +13,7 @@ from pathlib import Path
 from ..engine import Engine, mpi
 from ..protocols.capstan import Capstan
 from ..results.folder import prepare_run_folder
+from .settings import check_known, fibre_from
 
 TOLERANCE = 0.05
 FRICTIONS = (0.1, 0.3)
@@ -27,19 +28,12 @@ SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "spacing_ratio", "radiu
 
 def from_settings(settings: dict[str, float], friction: float, wrap_angle_rad: float) -> Capstan:
     """A :class:`Capstan` case with some defaults replaced (SI values)."""
-    from ..errors import InputError
     from ..model.beads import Discretisation, TimeStep
     from ..model.contact import ToolContact
-    from ..model.material import GLASS, FibreMaterial, VirtualFibre
 
-    unknown = set(settings) - set(SETTINGS)
-    if unknown:
-        raise InputError(f"unknown setting(s) {sorted(unknown)} for capstan; "
-                         f"allowed: {', '.join(SETTINGS)}")
+    check_known(settings, SETTINGS, "capstan")
     get = settings.get
-    material = FibreMaterial(get("modulus_pa", MODULUS_PA),
-                             get("density_kg_m3", GLASS.density_kg_m3), "glass, softened")
-    fibre = VirtualFibre.solid(material, get("diameter_m", 0.1e-3))
+    fibre = fibre_from(settings, MODULUS_PA, "glass, softened")
     return Capstan(fibre=fibre, wrap_angle_rad=wrap_angle_rad,
                    tool=ToolContact(friction=friction,
                                     stiffness_factor=get("tool_stiffness_factor", 0.1)),

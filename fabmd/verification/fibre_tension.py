@@ -6,6 +6,7 @@ from pathlib import Path
 
 from ..engine import Engine
 from ..protocols.fibre_tension import FibreTension
+from .settings import check_known, fibre_from
 
 TOLERANCE = 0.01
 
@@ -17,19 +18,13 @@ SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "length_m", "spacing_ra
 
 def from_settings(settings: dict[str, float]) -> FibreTension:
     """A :class:`FibreTension` with some defaults replaced (SI values)."""
-    from ..errors import InputError
     from ..model.beads import Discretisation, TimeStep
-    from ..model.material import GLASS, FibreMaterial, VirtualFibre
+    from ..model.material import GLASS
     from ..scene.outputs import TrajectoryOutput
 
-    unknown = set(settings) - set(SETTINGS)
-    if unknown:
-        raise InputError(f"unknown setting(s) {sorted(unknown)} for fibre-tension; "
-                         f"allowed: {', '.join(SETTINGS)}")
+    check_known(settings, SETTINGS, "fibre-tension")
     get = settings.get
-    material = FibreMaterial(get("modulus_pa", GLASS.modulus_pa),
-                             get("density_kg_m3", GLASS.density_kg_m3), GLASS.name)
-    fibre = VirtualFibre.solid(material, get("diameter_m", 0.1e-3))
+    fibre = fibre_from(settings, GLASS.modulus_pa, GLASS.name)
     disc = Discretisation(spacing_ratio=get("spacing_ratio", 0.5),
                           mass_scaling=get("mass_scaling", 1.0))
     step = TimeStep(factor=get("time_step_factor", 0.25), value_s=get("time_step_s"))

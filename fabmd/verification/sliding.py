@@ -14,6 +14,7 @@ from pathlib import Path
 from ..engine import Engine, mpi
 from ..protocols.sliding import Sliding
 from ..results.folder import prepare_run_folder
+from .settings import check_known, fibre_from
 
 TOLERANCE = 0.05
 #: (μ, normal model) of each case
@@ -26,19 +27,12 @@ SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "spacing_ratio", "load_
 
 def from_settings(settings: dict[str, float], friction: float, normal: str) -> Sliding:
     """A :class:`Sliding` case with some defaults replaced (SI values)."""
-    from ..errors import InputError
     from ..model.beads import Discretisation, TimeStep
     from ..model.contact import ContactModel
-    from ..model.material import GLASS, FibreMaterial, VirtualFibre
 
-    unknown = set(settings) - set(SETTINGS)
-    if unknown:
-        raise InputError(f"unknown setting(s) {sorted(unknown)} for sliding; "
-                         f"allowed: {', '.join(SETTINGS)}")
+    check_known(settings, SETTINGS, "sliding")
     get = settings.get
-    material = FibreMaterial(get("modulus_pa", MODULUS_PA),
-                             get("density_kg_m3", GLASS.density_kg_m3), "glass, softened")
-    fibre = VirtualFibre.solid(material, get("diameter_m", 0.1e-3))
+    fibre = fibre_from(settings, MODULUS_PA, "glass, softened")
     disc = Discretisation() if "spacing_ratio" not in settings else \
         Discretisation(spacing_ratio=settings["spacing_ratio"])
     contact = ContactModel(friction=friction, normal=normal,
