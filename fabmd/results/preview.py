@@ -45,6 +45,18 @@ def _draw(ax, xy: np.ndarray, d: np.ndarray, colours: np.ndarray) -> None:
     ax.add_collection(coll)
 
 
+def _section_axes(ax, axis: str, extent: tuple[float, float], z: tuple[float, float],
+                  pad: float, title: str) -> None:
+    """Limits (padded by a bead diameter), equal aspect, labels [mm] and title of a
+    cross-section panel."""
+    ax.set_xlim(extent[0] - pad, extent[1] + pad)
+    ax.set_ylim(z[0] - pad, z[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"{axis} [mm]")
+    ax.set_ylabel("z [mm]")
+    ax.set_title(title, fontsize=9)
+
+
 def _slab(model: BeadModel, axis: int, centre: float, half: float) -> np.ndarray:
     pos = model.positions[:, axis]
     d = pos - centre
@@ -124,13 +136,8 @@ def preview_png(model: BeadModel, path: Path, title: str = "") -> Path | None:
     order = np.argsort(-model.positions[sel, 1])  # nearer (smaller y) drawn last
     sel = sel[order]
     _draw(ax_xz, pos[sel][:, [0, 2]], d[sel], _colours(model, sel))
-    ax_xz.set_xlim(x_lo - d.max(), x_lo + span + d.max())
-    ax_xz.set_ylim(z_lo - d.max(), z_hi + d.max())
-    ax_xz.set_aspect("equal")
-    ax_xz.set_xlabel("x [mm]")
-    ax_xz.set_ylabel("z [mm]")
-    ax_xz.set_title(f"section along the warp: slab |y − {y0:.2f} mm| ≤ {half:.2f} mm",
-                    fontsize=9)
+    _section_axes(ax_xz, "x", (x_lo, x_lo + span), (z_lo, z_hi), d.max(),
+                  f"section along the warp: slab |y − {y0:.2f} mm| ≤ {half:.2f} mm")
 
     # 3. y–z slab through the first weft column
     wefts = [k for k, f in enumerate(families) if f == "weft"]
@@ -142,13 +149,8 @@ def preview_png(model: BeadModel, path: Path, title: str = "") -> Path | None:
     sel = sel[(pos[sel, 1] >= y_lo) & (pos[sel, 1] <= y_lo + span_y)]
     sel = sel[np.argsort(model.positions[sel, 0])]
     _draw(ax_yz, pos[sel][:, [1, 2]], d[sel], _colours(model, sel))
-    ax_yz.set_xlim(y_lo - d.max(), y_lo + span_y + d.max())
-    ax_yz.set_ylim(z_lo - d.max(), z_hi + d.max())
-    ax_yz.set_aspect("equal")
-    ax_yz.set_xlabel("y [mm]")
-    ax_yz.set_ylabel("z [mm]")
-    ax_yz.set_title(f"section along the weft: slab |x − {x0:.2f} mm| ≤ {halfx:.2f} mm",
-                    fontsize=9)
+    _section_axes(ax_yz, "y", (y_lo, y_lo + span_y), (z_lo, z_hi), d.max(),
+                  f"section along the weft: slab |x − {x0:.2f} mm| ≤ {halfx:.2f} mm")
 
     name = info.get("architecture", {}).get("name", "")
     # the clearance was measured on the loose fabric; a later state does not keep it
