@@ -78,6 +78,9 @@ def test_quasi_static_verdict_names_what_is_too_large():
                                           "damping_dissipation_j": 0.04, "relative_error": 5.2}}
     verdict = quasi_static_verdict(leaking)  # a specimen springing apart: work < 0
     assert verdict["problems"] == ["energy_balance_error = 5.2 > 0.05"]
+    moving = {**calm, "start_settled": False}  # loaded before its relaxation settled
+    assert "still moving" in quasi_static_verdict(moving)["problems"][0]
+    assert quasi_static_verdict({**calm, "start_settled": True})["ok"]
     assert set(QUASI_STATIC_LIMITS) >= {"max_kinetic_to_strain_energy", "damping_share"}
 
 
@@ -93,6 +96,7 @@ def test_a_tension_pulled_too_fast_is_flagged_not_quasi_static(tmp_path, woven_c
     slow = Tension(trajectory=quiet).run(woven_coupon.model, tmp_path / "slow",
                                          engine=Engine(progress=False))
     assert slow.summary["quasi_static"]["ok"], slow.summary["quasi_static"]
+    assert slow.summary["start_settled"] is True
     with pytest.warns(QuasiStaticWarning, match="not quasi-static"):
         fast = Tension(speed_fraction=2e-2, trajectory=quiet).run(
             woven_coupon.model, tmp_path / "fast", engine=Engine(progress=False))
@@ -100,3 +104,28 @@ def test_a_tension_pulled_too_fast_is_flagged_not_quasi_static(tmp_path, woven_c
     saved = json.loads((fast.run_dir / "summary.json").read_text())
     assert saved["quasi_static"]["problems"]
     assert all(spec["title"].startswith("NOT QUASI-STATIC") for spec in fast.plots)
+
+
+@pytest.mark.lammps
+def test_a_test_started_before_its_relaxation_settled_is_flagged(tmp_path, woven_coupon):
+    """A relaxation cut short (100 steps, judged every 500) never settles: the coupon stage
+    and the test both say so instead of passing a moving specimen on as a result."""
+    from fabmd.engine import Engine
+    from fabmd.errors import QuasiStaticWarning
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.tension import Tension
+    from fabmd.scene.outputs import TrajectoryOutput
+    from fabmd.scene.quasi_static import QuasiStatic
+
+    short = QuasiStatic(max_steps=100, check_every=500)
+    with pytest.warns(QuasiStaticWarning, match="did not settle"):
+        coupon = Coupon(length_m=8e-3, width_m=4e-3, relax=short).run(
+            woven_coupon.model, tmp_path / "coupon", engine=Engine(progress=False))
+    assert coupon.summary["settled"] is False
+    assert woven_coupon.summary["settled"] is True  # the default relaxation does settle
+    with pytest.warns(QuasiStaticWarning, match="still moving"):
+        test = Tension(relax=short, max_elongation_pct=0.5,
+                       trajectory=TrajectoryOutput(frames=0)).run(
+            coupon.model, tmp_path / "tension", engine=Engine(progress=False))
+    assert test.summary["start_settled"] is False
+    assert not test.summary["quasi_static"]["ok"]

@@ -9,6 +9,7 @@ start from (and, with ``trajectory`` frames, the relaxation as ``trajectory.h5``
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,9 +17,10 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError, SimulationFailed
+from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
+from ..model.bending import set_bending
 from ..model.contact import ContactModel
 from ..model.transform import cut, tile
 from ..results.folder import write_json
@@ -26,7 +28,7 @@ from ..results.measure import fabric_measures
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
-from ..scene.quasi_static import QuasiStatic
+from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render
 from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
 
@@ -50,10 +52,13 @@ class Coupon:
         trajectory: trajectory frames of the relaxation (``trajectory.h5``, ParaView
             files; spread over a quarter of ``relax.max_steps``, the relaxed state the last
             frame); default none.
-        bending_set_factor: give the cut fibres bending stiffness with their as-woven
-            shape as rest shape, this fraction of the solid virtual fibre's E·I, before the
-            relaxation (0, default: none; :mod:`fabmd.model.bending`). Bead chains without
-            bending straighten once cut free: a 45° coupon then falls apart.
+        bending_factor: give the cut fibres bending stiffness, this fraction of the
+            solid virtual fibre's E·I, before the relaxation (0, default: none;
+            :mod:`fabmd.model.bending`). Bead chains without bending are strings: cut free,
+            their crossings carry no force and a 45° coupon falls apart.
+        bending_set: share of the as-woven bend kept as the fibres' rest shape, in [0, 1]
+            (0, default: straight rest shape, the crimp is elastic and presses the
+            crossings together; 1: the as-woven shape, nothing pre-stressed).
     """
 
     length_m: float
@@ -65,7 +70,8 @@ class Coupon:
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=0))
-    bending_set_factor: float = 0.0
+    bending_factor: float = 0.0
+    bending_set: float = 0.0
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -76,7 +82,8 @@ class Coupon:
             inputs.positive_int("coupon.tile[0]", self.tile[0])
             inputs.positive_int("coupon.tile[1]", self.tile[1])
         check_trajectory("coupon.trajectory", self.trajectory)
-        inputs.in_range("coupon.bending_set_factor", self.bending_set_factor, 0.0, 1.0)
+        inputs.in_range("coupon.bending_factor", self.bending_factor, 0.0, 1.0)
+        inputs.in_range("coupon.bending_set", self.bending_set, 0.0, 1.0)
 
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
@@ -100,10 +107,8 @@ class Coupon:
                              "use a fully periodic cell or a finite piece")
         coupon = cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
                      edge_zone_m=self.edge_zone_m)
-        if self.bending_set_factor > 0:
-            from ..model.bending import set_bending
-
-            coupon = set_bending(coupon, self.bending_set_factor)
+        if self.bending_factor > 0:
+            coupon = set_bending(coupon, self.bending_factor, self.bending_set)
         return coupon
 
     def input_text(self, model: BeadModel) -> str:
@@ -152,7 +157,13 @@ class Coupon:
         if mpi.is_root():
             relaxed = BeadModel.load(Path(run_dir) / f"{COUPON}.data", Path(run_dir) / "model.json")
             relaxed.save(run_dir, stem=COUPON)
-            summary = {"relaxed": True, "cut": fabric_measures(geometry),
+            settled = relaxation_settled(Path(run_dir) / "log.lammps")
+            if settled is False:
+                warnings.warn(f"coupon in {run_dir}: the free relaxation did not settle within "
+                              f"{self.relax.max_steps} steps, the coupon is still moving: raise "
+                              f"relax.max_steps, or check that the coupon holds together",
+                              QuasiStaticWarning, stacklevel=2)
+            summary = {"relaxed": True, "settled": settled, "cut": fabric_measures(geometry),
                        "relaxed_state": fabric_measures(relaxed),
                        "overlap": overlap_summary(run_dir, self.contact),
                        "trajectory": trajectory.name if trajectory else None}

@@ -46,6 +46,7 @@ from ..scene import blocks
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import check_trajectory
+from ..scene.quasi_static import relaxation_settled
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
 
@@ -242,6 +243,8 @@ class DrivenTest:
             result = self.reduce(run_dir, start, monitor)
             result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
                                   trajectory=trajectory.name if trajectory else None)
+            if "settled all halt" in text and not resume:  # the test starts with a relaxation
+                result.summary["start_settled"] = relaxation_settled(run_dir / "log.lammps")
             verdict = quasi_static_verdict(result.summary, self.quasi_static_limits)
             result.summary["quasi_static"] = verdict
             if not verdict["ok"]:
@@ -290,7 +293,8 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
     """Is the curve quasi-static, and does its energy balance close? Each measure in
     ``limits`` (default
     :data:`QUASI_STATIC_LIMITS`) is read from the summary (``damping_share`` computed from
-    its energy balance); a measure the test does not report is not judged."""
+    its energy balance); a measure the test does not report is not judged. A summary whose
+    ``start_settled`` is False (the relaxation before the loading did not settle) fails."""
     limits = QUASI_STATIC_LIMITS if limits is None else limits
     derived = {"damping_share": lambda: damping_share(summary),
                "energy_balance_error": lambda: (summary.get("energy_balance") or {}).get(
@@ -299,6 +303,9 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
               for name in limits}
     problems = [f"{name} = {v:.2g} > {limits[name]:g}" for name, v in values.items()
                 if v is not None and v > limits[name]]
+    if summary.get("start_settled") is False:
+        problems.append("the specimen was still moving when the loading started (its "
+                        "relaxation did not settle within relax.max_steps)")
     return {"ok": not problems, "values": values, "limits": dict(limits),
             "problems": problems}
 

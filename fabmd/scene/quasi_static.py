@@ -95,3 +95,20 @@ class QuasiStatic:
         """A ``fix halt`` that ends the next run once the criterion holds."""
         return (f"fix             settled all halt {self.check_every} v_quasi_static > 0.5 "
                 f"error continue message yes")
+
+
+#: what LAMMPS writes when the ``settled`` halt of a relaxation fires
+SETTLED_MESSAGE = "Fix halt condition for fix-id settled met"
+
+
+def relaxation_settled(log_path) -> bool | None:
+    """Did the relaxation in this LAMMPS log reach the quasi-static criterion before its
+    step limit? (None: no log to tell.) A relaxation that did not leaves a state still
+    moving, and a test started from it mixes that motion into its curve."""
+    from pathlib import Path
+
+    path = Path(log_path)
+    if not path.is_file():
+        return None
+    with path.open(errors="replace") as f:
+        return any(SETTLED_MESSAGE in line for line in f)
