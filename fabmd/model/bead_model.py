@@ -45,12 +45,10 @@ class BondType:
 @dataclass(frozen=True)
 class AngleType:
     """One LAMMPS angle type: bending coefficient K = E·I/l0 [J] (``angle cosine``: a
-    straight rest shape), family; with ``rest_angle_deg`` the rest shape is that angle
-    (``angle harmonic``, K/2 so that the stiffness matches, see :mod:`fabmd.model.bending`)."""
+    straight rest shape), family."""
 
     coefficient: float
     family: str
-    rest_angle_deg: float | None = None
 
 
 @dataclass(frozen=True)

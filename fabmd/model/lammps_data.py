@@ -243,6 +243,15 @@ def read_data(path: Path, meta: dict) -> BeadModel:
         yarns=[Yarn(**y) for y in meta["yarns"]],
         box_lo=lo, box_hi=hi, periodic=tuple(meta.get("periodic", (False,) * 3)),
         images=images, angles=angles, angle_types=angle_types,
-        angle_type_table=[AngleType(**a) for a in meta.get("angle_types", [])],
+        angle_type_table=[_angle_type(a) for a in meta.get("angle_types", [])],
         info=meta.get("info", {}),
     )
+
+
+def _angle_type(entry: dict) -> AngleType:
+    """An angle type from ``model.json`` (files with a bent rest shape are refused)."""
+    if entry.get("rest_angle_deg") not in (None, 180.0):
+        raise InputError("this model was saved by an older fabmd with a bent rest shape for "
+                         "its bending terms, which is no longer supported "
+                         "(fabmd.model.bending); cut the coupon again")
+    return AngleType(entry["coefficient"], entry["family"])

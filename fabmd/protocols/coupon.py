@@ -20,7 +20,7 @@ from ..engine import Engine, mpi
 from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
-from ..model.bending import set_bending
+from ..model.bending import add_bending
 from ..model.contact import ContactModel
 from ..model.transform import cut, tile
 from ..results.folder import write_json
@@ -52,13 +52,11 @@ class Coupon:
         trajectory: trajectory frames of the relaxation (``trajectory.h5``, ParaView
             files; spread over a quarter of ``relax.max_steps``, the relaxed state the last
             frame); default none.
-        bending_factor: give the cut fibres bending stiffness, this fraction of the
-            solid virtual fibre's E·I, before the relaxation (0, default: none;
-            :mod:`fabmd.model.bending`). Bead chains without bending are strings: cut free,
-            their crossings carry no force and a 45° coupon falls apart.
-        bending_set: share of the as-woven bend kept as the fibres' rest shape, in [0, 1]
-            (0, default: straight rest shape, the crimp is elastic and presses the
-            crossings together; 1: the as-woven shape, nothing pre-stressed).
+        bending_factor: give the cut fibres bending stiffness with a straight rest shape,
+            this fraction of the solid virtual fibre's E·I, before the relaxation (0,
+            default: none; :mod:`fabmd.model.bending`): the woven crimp becomes elastic and
+            presses the crossings together. Bead chains without bending are strings: cut
+            free, their crossings carry no force.
     """
 
     length_m: float
@@ -71,7 +69,6 @@ class Coupon:
     time_step: TimeStep = field(default_factory=TimeStep)
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=0))
     bending_factor: float = 0.0
-    bending_set: float = 0.0
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -83,7 +80,6 @@ class Coupon:
             inputs.positive_int("coupon.tile[1]", self.tile[1])
         check_trajectory("coupon.trajectory", self.trajectory)
         inputs.in_range("coupon.bending_factor", self.bending_factor, 0.0, 1.0)
-        inputs.in_range("coupon.bending_set", self.bending_set, 0.0, 1.0)
 
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
@@ -108,7 +104,7 @@ class Coupon:
         coupon = cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
                      edge_zone_m=self.edge_zone_m)
         if self.bending_factor > 0:
-            coupon = set_bending(coupon, self.bending_factor, self.bending_set)
+            coupon = add_bending(coupon, self.bending_factor)
         return coupon
 
     def input_text(self, model: BeadModel) -> str:

@@ -56,15 +56,7 @@ def bonds(model: BeadModel, rest_length_scale: dict[int, float] | None = None) -
              f"{fmt(bt.rest_length_m * scale.get(i, 1.0))}   # {bt.family}"
              for i, bt in enumerate(model.bond_type_table, start=1)]
     table = model.angle_type_table
-    if table and len(model.angles) and any(at.rest_angle_deg is not None for at in table):
-        # a set rest shape (fabmd.model.bending): E = K_h (θ − θ0)², K_h = K/2 matches the
-        # cosine form's stiffness K(1 + cos θ) ≈ K/2 (π − θ)² at a straight rest shape
-        angle = ["angle_style     harmonic"]
-        angle += [f"angle_coeff     {i} {fmt(at.coefficient / 2)} "
-                  f"{fmt(180.0 if at.rest_angle_deg is None else at.rest_angle_deg)}"
-                  f"   # {at.family}" for i, at in enumerate(table, start=1)]
-        angle_block = "\n".join(angle)
-    elif table and len(model.angles):
+    if table and len(model.angles):
         angle = ["angle_style     cosine"]
         angle += [f"angle_coeff     {i} {fmt(at.coefficient)}   # {at.family}"
                   for i, at in enumerate(table, start=1)]
