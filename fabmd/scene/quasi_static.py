@@ -18,6 +18,7 @@ the reference force) AND the largest force on a free bead is below
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from .. import inputs
 from .templates import render
@@ -105,8 +106,6 @@ def relaxation_settled(log_path) -> bool | None:
     """Did the relaxation in this LAMMPS log reach the quasi-static criterion before its
     step limit? (None: no log to tell.) A relaxation that did not leaves a state still
     moving, and a test started from it mixes that motion into its curve."""
-    from pathlib import Path
-
     path = Path(log_path)
     if not path.is_file():
         return None
