@@ -46,8 +46,10 @@ TESTS: dict[str, TestKind] = {
     # clamped as cut: a relaxed square of slack yarns crumples in the frame
     "picture-frame": TestKind("fabmd.protocols.picture_frame", "PictureFrame",
                               {"length_m": 0.100, "width_m": 0.100, "relax": None}),
+    # yarn cohesion: cut free at 45°, yarns of loose fibres fray instead of trellising
     "bias-extension": TestKind("fabmd.protocols.bias_extension", "BiasExtension",
-                               {"length_m": 0.150, "width_m": 0.050, "angle_deg": 45.0}),
+                               {"length_m": 0.150, "width_m": 0.050, "angle_deg": 45.0,
+                                "cohesion_factor": 0.01}),
     # a square blank cut as tiled (no free relaxation: the drape's clamping phase relaxes it
     # under the blank holder); the quarter model keeps its x > 0, y > 0 part
     "drape": TestKind("fabmd.protocols.drape", "Drape",

@@ -34,12 +34,18 @@ MODEL_FORMAT_VERSION = 1
 
 @dataclass(frozen=True)
 class BondType:
-    """One LAMMPS bond type: ``bond harmonic`` K [J/m²], rest length r0 [m], family."""
+    """One LAMMPS bond type: ``bond harmonic`` K [J/m²], rest length r0 [m], family.
+
+    ``kind`` is ``"fibre"`` for the bonds along a virtual fibre and ``"cohesion"`` for the
+    bonds that hold the fibres of one yarn together (:mod:`fabmd.model.cohesion`); measures
+    of fibres (crimp, tension, length) use the fibre bonds only.
+    """
 
     coefficient: float
     rest_length_m: float
     family: str
     axial_stiffness_n: float = 0.0
+    kind: str = "fibre"
 
 
 @dataclass(frozen=True)
@@ -133,6 +139,15 @@ class BeadModel:
         """Positions plus image flags × box length (continuous across periodic faces)."""
         return self.positions + self.images * (self.box_hi - self.box_lo)
 
+    def fibre_bond_mask(self) -> np.ndarray:
+        """True for the bonds along a virtual fibre (not cohesion bonds)."""
+        fibre = np.array([bt.kind == "fibre" for bt in self.bond_type_table], bool)
+        return fibre[self.bond_types - 1] if self.n_bonds else np.zeros(0, bool)
+
+    def fibre_bond_types(self) -> list[BondType]:
+        """The bond types of fibre bonds."""
+        return [bt for bt in self.bond_type_table if bt.kind == "fibre"]
+
     def bond_lengths(self) -> np.ndarray:
         """Current length of every bond (minimum image in periodic directions) [m]."""
         d = self.positions[self.bonds[:, 1]] - self.positions[self.bonds[:, 0]]
@@ -178,6 +193,9 @@ class BeadModel:
                 raise InputError("a bond joins a bead to itself")
             if self.bond_types.min() < 1 or self.bond_types.max() > len(self.bond_type_table):
                 raise InputError(f"bond types must be 1..{len(self.bond_type_table)}")
+        kinds = {bt.kind for bt in self.bond_type_table} - {"fibre", "cohesion"}
+        if kinds:
+            raise InputError(f"bond type kind must be 'fibre' or 'cohesion', got {sorted(kinds)}")
         if len(self.angles) and (self.angle_types.min() < 1
                                  or self.angle_types.max() > len(self.angle_type_table)):
             raise InputError(f"angle types must be 1..{len(self.angle_type_table)}")

@@ -64,6 +64,7 @@ class BeadParameters:
     mass_kg: float
     axial_stiffness_n: float
     bending_stiffness_nm2: float = 0.0
+    cohesion_spring_n_per_m: float = 0.0  # sum of a bead's cohesion links (largest bead)
 
     def __post_init__(self):
         inputs.positive("beads.diameter_m", self.diameter_m)
@@ -71,6 +72,7 @@ class BeadParameters:
         inputs.positive("beads.mass_kg", self.mass_kg)
         inputs.positive("beads.axial_stiffness_n", self.axial_stiffness_n)
         inputs.non_negative("beads.bending_stiffness_nm2", self.bending_stiffness_nm2)
+        inputs.non_negative("beads.cohesion_spring_n_per_m", self.cohesion_spring_n_per_m)
         if self.bond_length_m > self.diameter_m * (1 + 1e-9):
             raise InputError(
                 f"bead spacing {self.bond_length_m:g} m is larger than the bead diameter "
@@ -101,7 +103,7 @@ class BeadParameters:
                       contacts: int = STABILITY_CONTACTS) -> float:
         """Upper bound of the squared highest angular frequency of a bead [1/s²]."""
         bending = 16.0 * self.bending_stiffness_nm2 / self.bond_length_m**3
-        return (4.0 * self.spring_n_per_m + bending
+        return (4.0 * self.spring_n_per_m + bending + self.cohesion_spring_n_per_m
                 + contacts * contact_stiffness_n_per_m) / self.mass_kg
 
     def critical_time_step_s(self, contact_stiffness_n_per_m: float = 0.0) -> float:
@@ -174,7 +176,15 @@ def model_bead_parameters(model) -> list[BeadParameters]:
     receives only a model can still derive its time step and contact stiffness.
     """
     out = []
-    for bt in model.bond_type_table:
+    spring = np.zeros(model.n_beads)
+    cohesion = ~model.fibre_bond_mask()
+    if cohesion.any():
+        k = np.array([2.0 * bt.coefficient for bt in model.bond_type_table])
+        k_links = k[model.bond_types[cohesion] - 1]
+        for end in (0, 1):
+            spring += np.bincount(model.bonds[cohesion, end], weights=k_links,
+                                  minlength=model.n_beads)
+    for bt in model.fibre_bond_types():
         fam = model.family_names.index(bt.family) + 1 if bt.family in model.family_names else 0
         mask = model.atom_types == fam
         if not mask.any():
@@ -186,7 +196,8 @@ def model_bead_parameters(model) -> list[BeadParameters]:
             bond_length_m=bt.rest_length_m,
             mass_kg=float(model.masses[mask].min()),
             axial_stiffness_n=2.0 * bt.coefficient * bt.rest_length_m,
-            bending_stiffness_nm2=max(bending, default=0.0)))
+            bending_stiffness_nm2=max(bending, default=0.0),
+            cohesion_spring_n_per_m=float(spring[mask].max())))
     return out
 
 

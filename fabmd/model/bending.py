@@ -34,7 +34,7 @@ from .bead_model import AngleType, BeadModel
 
 def chain_triples(model: BeadModel) -> np.ndarray:
     """(a, b, c) for every bead b with two bond partners a, c of its own fibre (0-based)."""
-    b = model.bonds
+    b = model.bonds[model.fibre_bond_mask()]
     same = model.fibre_ids[b[:, 0]] == model.fibre_ids[b[:, 1]]
     pairs = np.vstack([b[same], b[same][:, ::-1]])
     pairs = pairs[np.argsort(pairs[:, 0], kind="stable")]
@@ -62,7 +62,7 @@ def add_bending(model: BeadModel, factor: float) -> BeadModel:
     names = sorted(set(family.tolist()))
     table = []
     for fam in names:
-        types = [bt for bt in model.bond_type_table if bt.family == fam]
+        types = [bt for bt in model.fibre_bond_types() if bt.family == fam]
         bt = max(types, key=lambda t: t.coefficient * t.rest_length_m)
         ea = 2.0 * bt.coefficient * bt.rest_length_m
         d = float(model.diameters[model.atom_types == model.family_names.index(fam) + 1].max())

@@ -21,6 +21,7 @@ from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.bending import add_bending
+from ..model.cohesion import DEFAULT_REACH, add_cohesion
 from ..model.contact import ContactModel
 from ..model.transform import cut, tile
 from ..results.folder import write_json
@@ -57,6 +58,13 @@ class Coupon:
             default: none; :mod:`fabmd.model.bending`): the woven crimp becomes elastic and
             presses the crossings together. Bead chains without bending are strings: cut
             free, their crossings carry no force.
+        cohesion_factor: link the touching fibres of each yarn with springs at rest in the
+            cut shape, this fraction of the fibre bond's spring (0, default: none;
+            :mod:`fabmd.model.cohesion`): each yarn stays a yarn, with its cross-section,
+            its woven shape and an in-plane bending stiffness, as sizing and twist keep a
+            real one — what a bias-extension coupon needs to trellis instead of fraying.
+        cohesion_reach: link beads of other fibres of the yarn closer than this many bead
+            diameters.
     """
 
     length_m: float
@@ -69,6 +77,8 @@ class Coupon:
     time_step: TimeStep = field(default_factory=TimeStep)
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=0))
     bending_factor: float = 0.0
+    cohesion_factor: float = 0.0
+    cohesion_reach: float = DEFAULT_REACH
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -80,6 +90,8 @@ class Coupon:
             inputs.positive_int("coupon.tile[1]", self.tile[1])
         check_trajectory("coupon.trajectory", self.trajectory)
         inputs.in_range("coupon.bending_factor", self.bending_factor, 0.0, 1.0)
+        inputs.in_range("coupon.cohesion_factor", self.cohesion_factor, 0.0, 1.0)
+        inputs.in_range("coupon.cohesion_reach", self.cohesion_reach, 1.0, 3.0)
 
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
@@ -107,12 +119,23 @@ class Coupon:
             coupon = add_bending(coupon, self.bending_factor)
         return coupon
 
+    def with_cohesion(self, model: BeadModel) -> BeadModel:
+        """``model`` with this coupon's yarn cohesion (if any), at rest in its shape."""
+        if self.cohesion_factor <= 0:
+            return model
+        linked = add_cohesion(model, self.cohesion_factor, self.cohesion_reach)
+        if linked is model:
+            warnings.warn("coupon.cohesion_factor has no effect: no two fibres of one yarn "
+                          "touch (yarns of one virtual fibre, e.g. --fast, have nothing to "
+                          "link)", UserWarning, stacklevel=3)
+        return linked
+
     def input_text(self, model: BeadModel) -> str:
         beads = model_bead_parameters(model)
         kn = self.contact.stability_stiffness_n_per_m(beads)
         dt = self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
-        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
+        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
         ref = 1e-3 * ea
         return "\n".join([
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),
@@ -125,7 +148,8 @@ class Coupon:
             "fix             no_drift all momentum 100 linear 1 1 1 angular",
             blocks.guards(model, dt),  # before the relaxation: it is the run to guard
             blocks.relax(model, dt, "held", "free", self.relax, ref,
-                         model.n_bonds * ref**2 / (2 * k), trajectory=self.trajectory),
+                         int(model.fibre_bond_mask().sum()) * ref**2 / (2 * k),
+                         trajectory=self.trajectory),
             render("finish", final_data=f"{COUPON}.data"),
         ])
 
@@ -136,6 +160,7 @@ class Coupon:
         if self.relax is None:
             run_dir = write_run_folder(out, PROTOCOL, geometry, "# not relaxed\n",
                                        {"coupon": scene_dict(self)}, overwrite=overwrite)
+            geometry = self.with_cohesion(geometry)
             if mpi.is_root():
                 geometry.save(run_dir, stem=COUPON)
             return CouponResult(Path(run_dir), geometry, {"relaxed": False})
@@ -152,6 +177,9 @@ class Coupon:
         summary = None
         if mpi.is_root():
             relaxed = BeadModel.load(Path(run_dir) / f"{COUPON}.data", Path(run_dir) / "model.json")
+            # cohesion links go in after the relaxation: at rest with the fibres unloaded
+            # (linked while the cut fibres still carry the crimp tension, they would hold it)
+            relaxed = self.with_cohesion(relaxed)
             relaxed.save(run_dir, stem=COUPON)
             settled = relaxation_settled(Path(run_dir) / "log.lammps")
             if settled is False:
@@ -162,6 +190,7 @@ class Coupon:
             summary = {"relaxed": True, "settled": settled, "cut": fabric_measures(geometry),
                        "relaxed_state": fabric_measures(relaxed),
                        "overlap": overlap_summary(run_dir, self.contact),
+                       "cohesion_links": int((~relaxed.fibre_bond_mask()).sum()),
                        "trajectory": trajectory.name if trajectory else None}
             write_json(Path(run_dir) / "summary.json", summary)
         summary = mpi.bcast_json(summary)

@@ -192,9 +192,10 @@ class DrivenTest:
     def relax_block(self, model: BeadModel, held: str, free: str,
                     reference_force_n: float) -> str:
         """Free relaxation with ``held`` fixed until quasi-static (``self.relax``)."""
-        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
+        n = int(model.fibre_bond_mask().sum())
         return blocks.relax(model, self.time_step_s(model), held, free, self.relax,
-                            reference_force_n, model.n_bonds * reference_force_n**2 / (2 * k))
+                            reference_force_n, n * reference_force_n**2 / (2 * k))
 
     def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
                       mean_values: str = "", mean_names: str = "", print_values: str = "",

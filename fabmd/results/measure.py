@@ -47,10 +47,12 @@ def interior_mask(model: BeadModel, edge_m: float) -> np.ndarray:
 
 def fibre_crimp(model: BeadModel, mask: np.ndarray | None = None) -> np.ndarray:
     """Crimp of every fibre (fraction, not %), over its bonds with both beads in ``mask``."""
-    vec = bond_vectors(model)
-    fib = model.fibre_ids[model.bonds[:, 0]] - 1
+    fibre = model.fibre_bond_mask()
+    vec = bond_vectors(model)[fibre]
+    bonds = model.bonds[fibre]
+    fib = model.fibre_ids[bonds[:, 0]] - 1
     if mask is not None:
-        inside = mask[model.bonds[:, 0]] & mask[model.bonds[:, 1]]
+        inside = mask[bonds[:, 0]] & mask[bonds[:, 1]]
         vec, fib = vec[inside], fib[inside]
     path = np.bincount(fib, weights=np.linalg.norm(vec, axis=1), minlength=model.n_fibres)
     span = np.column_stack([np.bincount(fib, weights=vec[:, k], minlength=model.n_fibres)
@@ -81,8 +83,9 @@ def bond_tension_n(model: BeadModel, rest_length_scale: dict[int, float] | None 
 def family_tension_n(model: BeadModel, rest_length_scale: dict[int, float] | None = None
                      ) -> dict[str, dict[str, float]]:
     """Mean and max fibre tension and mean yarn tension per family [N]."""
-    t = bond_tension_n(model, rest_length_scale)
-    fam_of_bond = np.asarray(model.family_names)[model.atom_types[model.bonds[:, 0]] - 1]
+    fibre = model.fibre_bond_mask()
+    t = bond_tension_n(model, rest_length_scale)[fibre]
+    fam_of_bond = np.asarray(model.family_names)[model.atom_types[model.bonds[fibre, 0]] - 1]
     fibres_per_yarn = np.bincount(model.fibre_yarn, minlength=len(model.yarns) + 1)[1:]
     out = {}
     for f in model.family_names:
@@ -108,8 +111,9 @@ def fibre_volume_m3(model: BeadModel) -> float:
              if "fibre_area_m2" in v}
     if not areas:
         return float("nan")
-    vec = np.linalg.norm(bond_vectors(model), axis=1)
-    fam_of_bond = np.asarray(model.family_names)[model.atom_types[model.bonds[:, 0]] - 1]
+    fibre = model.fibre_bond_mask()
+    vec = np.linalg.norm(bond_vectors(model), axis=1)[fibre]
+    fam_of_bond = np.asarray(model.family_names)[model.atom_types[model.bonds[fibre, 0]] - 1]
     a = np.array([areas.get(f, np.nan) for f in fam_of_bond])
     return float(np.sum(a * vec))
 

@@ -27,13 +27,14 @@ PARAVIEW_DIR = "paraview"
 
 
 def drawn_bonds(model: BeadModel, positions: np.ndarray, box_lo, box_hi) -> np.ndarray:
-    """Indices of the bonds to draw: all but those spanning half a periodic box or more."""
+    """Indices of the bonds to draw: the fibre bonds (not cohesion links) but those spanning
+    half a periodic box or more."""
     bonds = model.bonds
+    keep = model.fibre_bond_mask()
     if not len(bonds) or not any(model.periodic):
-        return np.arange(len(bonds))
+        return np.flatnonzero(keep)
     d = np.abs(positions[bonds[:, 1]] - positions[bonds[:, 0]])
     lengths = np.asarray(box_hi, float) - np.asarray(box_lo, float)
-    keep = np.ones(len(bonds), bool)
     for k in range(3):
         if model.periodic[k]:
             keep &= d[:, k] < 0.5 * lengths[k]

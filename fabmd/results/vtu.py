@@ -51,13 +51,14 @@ def _write(path: Path, mesh, field_data: dict[str, np.ndarray]) -> None:
 
 
 def _open_bonds(model: BeadModel) -> np.ndarray:
-    """Bonds whose unwrapped length is that of a bond (not closing across the box)."""
+    """Fibre bonds whose unwrapped length is that of a bond (not closing across the box);
+    cohesion links are not drawn."""
     pos = model.unwrapped_positions
     if not model.n_bonds:
         return np.zeros(0, bool)
     d = np.linalg.norm(pos[model.bonds[:, 1]] - pos[model.bonds[:, 0]], axis=1)
-    longest = max(bt.rest_length_m for bt in model.bond_type_table)
-    return d < 3.0 * max(longest, float(model.diameters.max()))
+    longest = max(bt.rest_length_m for bt in model.fibre_bond_types())
+    return (d < 3.0 * max(longest, float(model.diameters.max()))) & model.fibre_bond_mask()
 
 
 def write_fibres_vtu(model: BeadModel, path: Path) -> Path | None:

@@ -37,9 +37,13 @@ def neighbour_skin(model: BeadModel) -> float:
 
 
 def comm_cutoff(model: BeadModel) -> float:
-    """Ghost cutoff [m]: covers contact (largest diameter + skin) and three bond lengths."""
-    longest_bond = max((bt.rest_length_m for bt in model.bond_type_table), default=0.0)
-    return max(float(model.diameters.max()) + neighbour_skin(model), 3.0 * longest_bond) * 1.01
+    """Ghost cutoff [m]: covers contact (largest diameter + skin), three fibre bond lengths
+    (angles, special neighbours) and a stretched cohesion link."""
+    longest_bond = max((bt.rest_length_m for bt in model.fibre_bond_types()), default=0.0)
+    longest_link = max((bt.rest_length_m for bt in model.bond_type_table
+                        if bt.kind == "cohesion"), default=0.0)
+    return max(float(model.diameters.max()) + neighbour_skin(model), 3.0 * longest_bond,
+               1.5 * longest_link) * 1.01
 
 
 def setup(model: BeadModel, protocol: str, data_file: str, time_step_s: float) -> str:
@@ -54,6 +58,7 @@ def bonds(model: BeadModel, rest_length_scale: dict[int, float] | None = None) -
     scale = rest_length_scale or {}
     lines = [f"bond_coeff      {i} {fmt(bt.coefficient)} "
              f"{fmt(bt.rest_length_m * scale.get(i, 1.0))}   # {bt.family}"
+             + ("" if bt.kind == "fibre" else f" {bt.kind}")
              for i, bt in enumerate(model.bond_type_table, start=1)]
     table = model.angle_type_table
     if table and len(model.angles):
