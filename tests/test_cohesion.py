@@ -15,6 +15,7 @@ from fabmd.model.cohesion import REST_BIN, add_cohesion, close_pairs, cohesion_l
 from fabmd.model.transform import cut, tile
 from fabmd.results.measure import family_crimp, family_tension_n
 from fabmd.scene import blocks
+from fabmd.scene.outputs import TrajectoryOutput
 
 from .fabrics import parallel_fibres, plain_weave_cell
 
@@ -150,17 +151,8 @@ def test_the_bias_coupon_of_the_pipeline_links_its_yarns():
 
 
 def test_coupon_links_after_its_free_relaxation_and_at_rest_there(tmp_path):
-    from fabmd.engine import Engine
-    from fabmd.protocols.coupon import Coupon
-    from fabmd.scene.quasi_static import QuasiStatic
-
     # two yarns of three touching fibres, a little stretched: cut, they spring back first
-    fabric = dataclasses.replace(_one_yarn(n_fibres=6), fibre_yarn=np.repeat([1, 2], 3),
-                                 yarns=[Yarn("warp-0", "warp"), Yarn("warp-1", "warp")])
-    fabric = dataclasses.replace(fabric, positions=fabric.positions * [1.002, 1.0, 1.0])
-    coupon = Coupon(length_m=6e-3, width_m=2.4e-3, cohesion_factor=0.1,
-                    relax=QuasiStatic(max_steps=20_000, check_every=200))
-    result = coupon.run(fabric, tmp_path / "coupon", engine=Engine(progress=False))
+    result = _linked_coupon(tmp_path)
     relaxed = result.model
     links = ~relaxed.fibre_bond_mask()
     assert result.summary["cohesion_links"] == int(links.sum()) > 0
@@ -169,6 +161,36 @@ def test_coupon_links_after_its_free_relaxation_and_at_rest_there(tmp_path):
     # the fibres were unloaded before linking: no stretch held by the links
     fibre_strain = relaxed.bond_lengths()[~links] / rest[~links] - 1
     assert np.abs(fibre_strain).max() < 2e-4
+
+
+def _linked_coupon(tmp_path):
+    """A relaxed coupon of two yarns of three touching fibres, linked."""
+    from fabmd.engine import Engine
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.scene.quasi_static import QuasiStatic
+
+    fabric = dataclasses.replace(_one_yarn(n_fibres=6), fibre_yarn=np.repeat([1, 2], 3),
+                                 yarns=[Yarn("warp-0", "warp"), Yarn("warp-1", "warp")])
+    fabric = dataclasses.replace(fabric, positions=fabric.positions * [1.002, 1.0, 1.0])
+    coupon = Coupon(length_m=6e-3, width_m=2.4e-3, cohesion_factor=0.1, cohesion_reach=2.5,
+                    relax=QuasiStatic(max_steps=20_000, check_every=200))
+    return coupon.run(fabric, tmp_path / "coupon", engine=Engine(progress=False))
+
+
+@pytest.mark.mpi
+def test_a_linked_coupon_gives_the_same_tension_on_two_mpi_ranks(tmp_path, mpirun):
+    """The links reach further than a fibre bond: the ghost cutoff must cover them."""
+    from fabmd.engine import Engine
+    from fabmd.protocols.tension import Tension
+
+    coupon = _linked_coupon(tmp_path).model
+    test = Tension(max_elongation_pct=0.5, trajectory=TrajectoryOutput(frames=0))
+    one = test.run(coupon, tmp_path / "one", engine=Engine(backend="standalone"))
+    two = test.run(coupon, tmp_path / "two", engine=Engine(backend="standalone", ranks=2))
+    assert two.summary["ranks"] == 2
+    f1, f2 = one.summary["max_force_n"], two.summary["max_force_n"]
+    assert f1 > 0
+    assert f2 == pytest.approx(f1, rel=1e-6)
 
 
 def test_cohesion_on_yarns_of_one_fibre_warns(tmp_path):
