@@ -200,3 +200,16 @@ def test_cohesion_on_yarns_of_one_fibre_warns(tmp_path):
     with pytest.warns(UserWarning, match="no effect"):
         Coupon(length_m=6e-3, width_m=1e-3, cohesion_factor=0.1, relax=None).run(
             single, tmp_path / "coupon")
+
+
+def test_a_picture_frame_preload_shrinks_the_fibres_not_the_links():
+    from fabmd.protocols.picture_frame import PictureFrame
+
+    square = add_cohesion(_one_yarn(n_fibres=6, length_m=2.5e-3), 0.1)  # 3 x 3 mm of beads
+    prepared = PictureFrame(pretension_strain=0.01).prepare(square)
+    preloaded = set(PictureFrame(pretension_strain=0.01).preload_types(prepared))
+    assert preloaded
+    kinds = {prepared.bond_type_table[t - 1].kind for t in preloaded}
+    assert kinds == {"fibre"}
+    links = ~prepared.fibre_bond_mask()
+    assert not set(prepared.bond_types[links].tolist()) & preloaded

@@ -58,9 +58,10 @@ class Coupon:
             default: none; :mod:`fabmd.model.bending`): the woven crimp becomes elastic and
             presses the crossings together. Bead chains without bending are strings: cut
             free, their crossings carry no force.
-        cohesion_factor: link the touching fibres of each yarn with springs at rest in the
-            cut shape, this fraction of the fibre bond's spring (0, default: none;
-            :mod:`fabmd.model.cohesion`): each yarn stays a yarn, with its cross-section,
+        cohesion_factor: link the touching fibres of each yarn, after the free relaxation,
+            with springs at rest in the relaxed coupon, this fraction of the fibre bond's
+            spring (0, default: none; :mod:`fabmd.model.cohesion`): each yarn stays a
+            yarn, with its cross-section,
             its woven shape and an in-plane bending stiffness, as sizing and twist keep a
             real one — what a bias-extension coupon needs to trellis instead of fraying.
         cohesion_reach: link beads of other fibres of the yarn closer than this many bead

@@ -376,7 +376,7 @@ class Drape(DrivenTest):
         sym_x: tuple[int, ...] = ()
         sym_y: tuple[int, ...] = ()
         if quarter:  # fibre ends cut by the symmetry planes
-            longest = max(bt.rest_length_m for bt in model.bond_type_table)
+            longest = max(bt.rest_length_m for bt in model.fibre_bond_types())
             ends = np.unique(model.fibre_ends().ravel())
             sym_x = tuple(int(i) for i in ends[q[ends, 0] < 1.01 * longest])
             sym_y = tuple(int(i) for i in ends[q[ends, 1] < 1.01 * longest])
@@ -430,7 +430,7 @@ class Drape(DrivenTest):
         crossing under it."""
         control = self.holder_control(model, geometry)
         ref = self.holder_share_n(geometry) / control["crossings_under_holder"]
-        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
         dt = self.time_step_s(model)
         return {"clamp_damping": 0.7,
                 "clamp_drag": float(np.median(model.masses)) / (200.0 * dt),
@@ -823,7 +823,7 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
                 "after the start-up. The kinetic energy is mostly the fabric moving with the "
                 "punch, so KE/W overstates the dynamic part where the punch force is small"}
     rest = np.array([bt.rest_length_m for bt in model.bond_type_table])[model.bond_types - 1]
-    strain = final.bond_lengths() / rest - 1.0
+    strain = (final.bond_lengths() / rest - 1.0)[model.fibre_bond_mask()]
     ratio = (inertia["mean_inertial_force_n"] / inertia["mean_punch_force_n"]
              if inertia["mean_inertial_force_n"] is not None and inertia["mean_punch_force_n"]
              else None)

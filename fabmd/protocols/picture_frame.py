@@ -244,7 +244,8 @@ class PictureFrame(DrivenTest):
         if self.pretension_strain == 0:
             return model
         clamped = self.clamped(model)
-        preloaded = ~(clamped[model.bonds[:, 0]] & clamped[model.bonds[:, 1]])
+        preloaded = (~(clamped[model.bonds[:, 0]] & clamped[model.bonds[:, 1]])
+                     & model.fibre_bond_mask())  # the fibres, not yarn cohesion links
         table = list(model.bond_type_table)
         types = model.bond_types.copy()
         new_type = {}
@@ -288,7 +289,7 @@ class PictureFrame(DrivenTest):
         g = self.frame(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
         outputs = self.outputs_block(model, power, power_ref, print_values="${d} ${shear_deg}",

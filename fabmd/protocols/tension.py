@@ -115,7 +115,7 @@ class Tension(DrivenTest):
         left, right, _ = self.clamps(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
         ref_force *= 1e-3 * self.max_elongation_pct
         power, power_ref = clamp_power("clamps")
         outputs = self.outputs_block(
