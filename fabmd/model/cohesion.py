@@ -29,8 +29,9 @@ side by side in one layer (three fibres in a 1.6 × 0.8 mm section) has no depth
 the fabric, its crimp is not held, and the example's bias coupon made that way frays as
 before (measured: centre 4° for 40°, drag 87 % of the work); seven fibres in two layers
 hold. The link factor sets the yarn's bending stiffness and with it the level of a bias
-force (measured on the example: 1.0 / 1.7 / 2.5 N at 10 / 20 / 30° with 0.001, 5.0 / 9.8 /
-13.5 N with 0.01): treat it as a yarn property to calibrate against a measured bias curve.
+force (measured on the example at speed 2e-4: 1.0 / 1.7 / 2.5 N at 10 / 20 / 30° with
+0.001, 5.0 / 9.8 / 13.5 N with 0.01): treat it as a yarn property to calibrate against a
+measured bias curve.
 """
 
 from __future__ import annotations
