@@ -61,9 +61,9 @@ class Coupon:
         cohesion_factor: link the touching fibres of each yarn, after the free relaxation,
             with springs at rest in the relaxed coupon, this fraction of the fibre bond's
             spring (0, default: none; :mod:`fabmd.model.cohesion`): each yarn stays a
-            yarn, with its cross-section,
-            its woven shape and an in-plane bending stiffness, as sizing and twist keep a
-            real one — what a bias-extension coupon needs to trellis instead of fraying.
+            yarn, with its cross-section, its woven shape and an in-plane bending
+            stiffness, as sizing and twist keep a real one — what a bias-extension coupon
+            needs to trellis instead of fraying.
         cohesion_reach: link beads of other fibres of the yarn closer than this many bead
             diameters.
     """
