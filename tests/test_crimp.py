@@ -76,7 +76,7 @@ def test_crimp_writes_its_trajectory_with_the_crimped_state_last(crimped):
     u = fabmd.load(run_dir)  # checks the bond count against model.data too
     assert len(u.bonds) == data_file_bond_count(run_dir / "model.data") == loose.n_bonds
     steps = [ts.data["step"] for ts in u.trajectory]
-    # (summary "steps" is the last history line; the run may go on to the next check)
+    # (summary "steps" is where LAMMPS stopped: the final frame)
     assert steps[0] == 0 and steps[-1] >= result.summary["steps"] and len(steps) >= 3
     assert np.all(np.diff(steps) > 0)
     # the run stopped once quasi-static: the last frame is the crimped state

@@ -27,11 +27,11 @@ def run(args) -> int:
     lo, cr = s["loose"], s["crimped"]
     crimps = ", ".join(f"{f} {lo['crimp_pct'][f]:.2f} -> {cr['crimp_pct'][f]:.2f} %"
                        for f in cr["crimp_pct"])
-    text = (f"crimped {scene.source}: {cr['n_beads']} beads, {s['steps']} steps, "
-            f"{s['wall_s']:.1f} s; quasi-static: {s['quasi_static']}\n"
+    text = (f"crimped {scene.source}: {cr['n_beads']:,} beads, {s['wall_s']:.3g} s wall\n"
+            f"  {s.get('stop', s['steps'])}\n"
             f"  thickness {1e3 * lo['thickness_m']:.3f} -> {1e3 * cr['thickness_m']:.3f} mm\n"
-            f"  crimp {crimps}\n"
-            f"  fibre volume fraction {cr['fibre_volume_fraction']}\n"
+            f"  crimp ({cr.get('crimp_definition', 'per fibre')}) {crimps}\n"
+            f"  fibre volume fraction {cr['fibre_volume_fraction']:.3f}\n"
             f"  results in {result.run_dir}")
     emit(s, args.json, text)
     return 0

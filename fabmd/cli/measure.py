@@ -45,8 +45,8 @@ def run(args) -> int:
     crimps = ", ".join(f"{f} {c:.2f} %" for f, c in measures["crimp_pct"].items())
     text = (f"{folder / data}: {model.n_beads} beads\n"
             f"  thickness {1e3 * measures['thickness_m']:.3f} mm ({measures['measured_over']})\n"
-            f"  crimp {crimps}\n"
-            f"  fibre volume fraction {measures['fibre_volume_fraction']}\n"
+            f"  crimp ({measures.get('crimp_definition', 'per fibre')}) {crimps}\n"
+            f"  fibre volume fraction {measures['fibre_volume_fraction']:.3f}\n"
             f"  written {out} and {folder / 'measures.png'}")
     emit(measures, args.json, text)
     return 0

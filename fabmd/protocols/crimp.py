@@ -21,6 +21,7 @@ crimped state is its last frame).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,7 +29,7 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError, SimulationFailed
+from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
@@ -36,6 +37,7 @@ from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import fabric_measures
 from ..results.plots import plot_curves
 from ..results.preview import preview_png
+from ..results.run_record import RunEnd, read_run_end
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
@@ -268,9 +270,21 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     crimped.info = dict(crimped.info, crimp={"expansion": crimp.expansion})
     crimped.save(run_dir, stem=CRIMPED)
     qs = crimp.quasi_static
-    settled = bool(raw["ke_ratio"][-1] < qs.kinetic_ratio
-                   and raw["force_ratio"][-1] < qs.force_ratio)
-    steps = int(raw["step"][-1])
+    # how the run ended, from LAMMPS's log: the relaxation stops at its 'settled' halt,
+    # usually between two history lines
+    end = read_run_end(run_dir, relaxation=True)
+    if end is None:  # no log (e.g. removed): fall back on the last history line
+        settled = bool(raw["ke_ratio"][-1] < qs.kinetic_ratio
+                       and raw["force_ratio"][-1] < qs.force_ratio)
+        end = RunEnd(int(raw["step"][-1]), "quasi-static" if settled else "budget")
+    settled = end.quasi_static
+    steps = end.final_step
+    if not settled:
+        warnings.warn(f"crimp in {run_dir}: {end.sentence()}; the crimped state may still be "
+                      f"moving (raise crimp.quasi_static.max_steps)", QuasiStaticWarning,
+                      stacklevel=2)
+    final_ke = end.final_thermo.get("v_qs_ke_ratio", float(raw["ke_ratio"][-1]))
+    final_force = end.final_thermo.get("v_qs_force_ratio", float(raw["force_ratio"][-1]))
     history = {"step": raw["step"], "kinetic_energy_j": raw["kinetic_j"],
                "strain_energy_j": raw["strain_energy_j"],
                "ke_to_strain_energy": raw["ke_ratio"], "force_residual_ratio": raw["force_ratio"],
@@ -289,10 +303,13 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
         "time_step_s": crimp.time_step_s(loose),
         "ramp_steps": ramp,
         "steps": steps,
+        "stopped_by": end.stopped_by,
+        "stop": end.sentence(),
         "quasi_static": settled,
         "criterion": {"kinetic_ratio": qs.kinetic_ratio, "force_ratio": qs.force_ratio,
-                      "final_kinetic_ratio": float(raw["ke_ratio"][-1]),
-                      "final_force_ratio": float(raw["force_ratio"][-1])},
+                      "final_kinetic_ratio": float(final_ke),
+                      "final_force_ratio": float(final_force),
+                      "max_steps": qs.max_steps},
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
         "overlap": overlap_summary(run_dir, crimp.contact),
