@@ -27,10 +27,14 @@ def run(args) -> int:
     lo, cr = s["loose"], s["crimped"]
     crimps = ", ".join(f"{f} {lo['crimp_pct'][f]:.2f} -> {cr['crimp_pct'][f]:.2f} %"
                        for f in cr["crimp_pct"])
+    centre = cr.get("centreline_crimp_pct") or {}
+    if centre:
+        crimps += " (yarn centreline: " + ", ".join(f"{f} {c:.2f} %"
+                                                   for f, c in centre.items()) + ")"
     text = (f"crimped {scene.source}: {cr['n_beads']:,} beads, {s['wall_s']:.3g} s wall\n"
             f"  {s.get('stop', s['steps'])}\n"
             f"  thickness {1e3 * lo['thickness_m']:.3f} -> {1e3 * cr['thickness_m']:.3f} mm\n"
-            f"  crimp ({cr.get('crimp_definition', 'per fibre')}) {crimps}\n"
+            f"  crimp per fibre {crimps}\n"
             f"  fibre volume fraction {cr['fibre_volume_fraction']:.3f}\n"
             f"  results in {result.run_dir}")
     emit(s, args.json, text)

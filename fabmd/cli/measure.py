@@ -43,9 +43,13 @@ def run(args) -> int:
     write_json(out, measures)
     preview_png(model, folder / "measures.png", title=f"{folder.name}: {data}")
     crimps = ", ".join(f"{f} {c:.2f} %" for f, c in measures["crimp_pct"].items())
+    centre = measures.get("centreline_crimp_pct") or {}
+    if centre:
+        crimps += " (yarn centreline: " + ", ".join(f"{f} {c:.2f} %"
+                                                   for f, c in centre.items()) + ")"
     text = (f"{folder / data}: {model.n_beads} beads\n"
             f"  thickness {1e3 * measures['thickness_m']:.3f} mm ({measures['measured_over']})\n"
-            f"  crimp ({measures.get('crimp_definition', 'per fibre')}) {crimps}\n"
+            f"  crimp per fibre {crimps}\n"
             f"  fibre volume fraction {measures['fibre_volume_fraction']:.3f}\n"
             f"  written {out} and {folder / 'measures.png'}")
     emit(measures, args.json, text)

@@ -6,7 +6,9 @@ Definitions (TEXTILE-PRIMER.md):
   measured region (default: every bead), so a loose and a crimped state compare;
 * crimp of a fibre — path length over the in-plane length it spans, minus one:
   c = Σ|b_i| / |Σ b_i,xy| − 1 over its bonds (a closed periodic fibre spans its
-  period); a family's crimp is the mean over its fibres;
+  period); a family's crimp is the mean over its fibres (``crimp_pct``, named by
+  ``crimp_definition``); the crimp of the yarn centrelines is beside it
+  (``centreline_crimp_pct``, :func:`fabmd.analysis.crimp_by_family`);
 * fabric fibre volume fraction — filament volume (Σ A·path length) over
   thickness × in-plane area of the region;
 * bond tension — k·(r − r0) with k = E·A/r0 of the bond type (the rest length
@@ -170,6 +172,26 @@ def yarn_sections(model: BeadModel, stations=(0.25, 0.5, 0.75)) -> dict[str, dic
     return out
 
 
+#: what ``crimp_pct`` of :func:`fabric_measures` is (the summary names it)
+CRIMP_DEFINITION = ("per fibre: mean over a family's virtual fibres of path length / "
+                    "in-plane span - 1")
+#: what ``centreline_crimp_pct`` is
+CENTRELINE_CRIMP_DEFINITION = ("yarn centreline: mean over a family's yarns of the crimp of "
+                               "the centreline (mean of the yarn's fibres per station)")
+
+
+def centreline_crimp_pct(model: BeadModel) -> dict[str, float] | None:
+    """Crimp of the yarn centrelines per family [%] (``fabmd.analysis.crimp_by_family``),
+    over every bead; None where the model has no yarn centrelines to take."""
+    from ..analysis import FabricFrame, crimp_by_family
+
+    try:
+        crimps = crimp_by_family(FabricFrame.from_model(model))
+    except (ValueError, IndexError, ZeroDivisionError):
+        return None
+    return {f: 100 * c for f, c in crimps.items()}
+
+
 def fabric_measures(model: BeadModel, rest_length_scale: dict[int, float] | None = None,
                     edge_m: float = 0.0) -> dict:
     """Summary of a fabric state (keys carry units).
@@ -184,6 +206,8 @@ def fabric_measures(model: BeadModel, rest_length_scale: dict[int, float] | None
     return {
         "thickness_m": t,
         "crimp_pct": {f: 100 * c for f, c in family_crimp(model, mask).items()},
+        "crimp_definition": CRIMP_DEFINITION,
+        "centreline_crimp_pct": centreline_crimp_pct(model),
         "measured_over": "interior" if mask is not None else "all beads",
         "fibre_volume_fraction": volume / (t * area) if np.isfinite(volume) else None,
         "in_plane_area_m2": area,
