@@ -61,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     module = importlib.import_module(f"fabmd.cli.{COMMANDS[args.command][0]}")
     from ..errors import FabmdError
+    from .terminal import install_warning_format
+
+    install_warning_format()  # warnings as one "fabmd: warning: ..." line each
 
     try:
         return int(module.run(args) or 0)

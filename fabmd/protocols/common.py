@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
-import shlex
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..engine import Engine, EngineResult, mpi
-from ..engine.standalone import command_line
+from ..engine.run_script import run_sh_text
 from ..errors import OverlapWarning
 from ..model.bead_model import BeadModel
 from ..model.contact import ContactModel
@@ -80,14 +79,7 @@ def write_run_folder(out: Path | None, protocol: str, model: BeadModel, input_te
         name = input_name(protocol)
         (run_dir / name).write_text(input_text)
         write_json(run_dir / "scene.json", scene)
-        local = shlex.join(command_line(name, ranks=2))
-        (run_dir / "run.sh").write_text(
-            "#!/bin/sh\n"
-            "# Runs this folder with plain LAMMPS, here or on a cluster:\n"
-            f"#   NP=4 sh run.sh      (or: mpirun -np 4 lmp -in {name})\n"
-            f"# On this machine fabmd would run: {local}\n"
-            'cd "$(dirname "$0")"\n'
-            f'exec mpirun -np "${{NP:-1}}" "${{LMP:-lmp}}" -in {name} -log log.lammps\n')
+        (run_dir / "run.sh").write_text(run_sh_text(name))
     mpi.barrier()  # every rank reads the input that rank 0 wrote
     return run_dir
 
