@@ -30,7 +30,7 @@ from .angles import (
     zone_shear_angle_deg,
 )
 from .frame import FabricFrame
-from .sections import CrossSection, convex_hull, cross_section
+from .sections import CrossSection, FabricCut, convex_hull, cross_section, fabric_cut
 from .surface import fibre_tangents, grid_edges, surface_shear_angle_field
 from .yarns import (
     centreline,
@@ -46,6 +46,7 @@ from .yarns import (
 
 __all__ = [
     "CrossSection",
+    "FabricCut",
     "FabricFrame",
     "Field",
     "axial_mean_deg",
@@ -55,6 +56,7 @@ __all__ = [
     "crimp_by_family",
     "crimp_by_yarn",
     "cross_section",
+    "fabric_cut",
     "curvature",
     "family_axes_deg",
     "fibre_segments",

@@ -143,3 +143,96 @@ def cross_section(frame: FabricFrame, yarn: str | int, station: float = 0.5,
         height_m=float(np.ptp(pts[:, 1]) + d), area_m2=polygon_area(hull),
         ellipse_major_m=float(major + d), ellipse_minor_m=float(minor + d),
         ellipse_angle_rad=angle)
+
+
+# -- fabric cuts: thin planar slices through the whole fabric -------------------------------
+#: the in-plane axis a cut normal to x (y) shows besides z
+_CUT_AXES = {"x": (0, 1), "y": (1, 0)}
+
+
+@dataclass
+class FabricCut:
+    """A thin planar cut through a whole fabric, as a micro-CT slice shows it (SI).
+
+    The plane is normal to ``normal`` (``"x"``: the warp direction, so it shows the weft
+    paths and the warp cut across; ``"y"``: the reverse) at ``position_m``. A bead is in
+    the cut when the plane passes through it: |distance| ≤ its radius (a slice one bead
+    diameter thick).
+
+    Attributes:
+        normal, position_m: the plane.
+        indices: (k,) 0-based bead indices in the cut, ordered by bead.
+        points_m: (k, 2) bead centres in the plane: (coordinate along the other in-plane
+            axis, z).
+        distances_m: (k,) signed distance of every bead centre from the plane.
+        diameters_m: (k,) bead diameters.
+        families: (k,) yarn family of every bead in the cut.
+        extent_m: ((lo, hi) along the other in-plane axis, (lo, hi) in z): the whole
+            fabric's extent (bead surfaces; the box along a periodic axis).
+    """
+
+    normal: str
+    position_m: float
+    indices: np.ndarray
+    points_m: np.ndarray
+    distances_m: np.ndarray
+    diameters_m: np.ndarray
+    families: list[str]
+    extent_m: tuple[tuple[float, float], tuple[float, float]]
+
+    @property
+    def across(self) -> str:
+        """Name of the in-plane axis the cut shows (``"y"`` for a cut normal to x)."""
+        return "y" if self.normal == "x" else "x"
+
+
+def fabric_cut(frame: FabricFrame, normal: str, position_m: float,
+               half_thickness_m: float | np.ndarray | None = None) -> FabricCut:
+    """The beads a plane normal to ``normal`` at ``position_m`` [m] passes through.
+
+    Args:
+        frame: the fabric state (needs ``diameters``).
+        normal: ``"x"`` or ``"y"``.
+        position_m: where the plane is, in the model's coordinates [m]; along a periodic
+            axis any value (taken modulo the period), else within the fabric's extent.
+        half_thickness_m: half the slice thickness [m] (default: each bead's radius, so
+            exactly the beads the plane cuts).
+
+    Raises:
+        InputError: unknown ``normal``, a position outside the fabric, no diameters.
+    """
+    if normal not in _CUT_AXES:
+        raise InputError(f"cut normal must be 'x' or 'y', got {normal!r}")
+    if frame.diameters is None:
+        raise InputError("a fabric cut needs the bead diameters (frame.diameters is None)")
+    axis, other = _CUT_AXES[normal]
+    pos = frame.wrap(frame.positions) if any(frame.periodic) else frame.positions
+    d = frame.diameters
+    radius = 0.5 * float(d.max())
+    position_m = float(position_m)
+    if frame.periodic[axis]:
+        lo_n, hi_n = frame.box_lo[axis], frame.box_hi[axis]
+    else:
+        lo_n = float((pos[:, axis] - 0.5 * d).min())
+        hi_n = float((pos[:, axis] + 0.5 * d).max())
+        if not lo_n <= position_m <= hi_n:
+            raise InputError(f"cut position {normal} = {1e3 * position_m:.4g} mm is outside "
+                             f"the fabric ({1e3 * lo_n:.4g} to {1e3 * hi_n:.4g} mm)")
+    dist = pos[:, axis] - position_m
+    if frame.periodic[axis]:
+        period = hi_n - lo_n
+        dist = dist - period * np.round(dist / period)
+    half = 0.5 * d if half_thickness_m is None else np.broadcast_to(
+        np.asarray(half_thickness_m, float), d.shape)
+    idx = np.flatnonzero(np.abs(dist) <= half)
+    if frame.periodic[other]:
+        across = (float(frame.box_lo[other]), float(frame.box_hi[other]))
+    else:
+        across = (float(pos[:, other].min()) - radius, float(pos[:, other].max()) + radius)
+    z = (float(pos[:, 2].min()) - radius, float(pos[:, 2].max()) + radius)
+    yarn_of_bead = frame.fibre_yarn[frame.fibre_ids[idx] - 1] - 1
+    return FabricCut(normal=normal, position_m=position_m, indices=idx,
+                     points_m=np.column_stack([pos[idx, other], pos[idx, 2]]),
+                     distances_m=dist[idx], diameters_m=d[idx].copy(),
+                     families=[frame.yarn_families[y] for y in yarn_of_bead],
+                     extent_m=(across, z))

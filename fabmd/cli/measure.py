@@ -18,6 +18,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="measure only beads this far inside the fabric's edges [m]")
     p.add_argument("--overwrite", action="store_true", help="replace measures.json")
     p.add_argument("--json", action="store_true", help="print the measures as JSON")
+    p.add_argument("--cut-at", action="append", default=[], metavar="POSITION",
+                   help="also write a cut image (cut_<normal>_<mm>mm.png + .csv of its beads) "
+                        "at this coordinate of the model, e.g. 5mm (repeatable); the cut holds "
+                        "the beads within ±d/2 of the plane")
+    p.add_argument("--cut-normal", choices=["x", "y"], default="x",
+                   help="normal of the --cut-at planes: x (warp direction; the cut shows the "
+                        "weft paths, default) or y")
 
 
 def run(args) -> int:
@@ -38,10 +45,17 @@ def run(args) -> int:
     if out.exists() and not args.overwrite:
         raise OutputExists(f"{out} exists; pass --overwrite to replace it")
     model = BeadModel.load(folder / data, folder / meta)
+    cut_files = _check_cuts(model, folder, args)  # bad positions fail before anything is written
     measures = fabric_measures(model, edge_m=args.edge_m)
     measures["state"] = data
+    measures["cuts"] = [p.name for p, _ in cut_files]
     write_json(out, measures)
     preview_png(model, folder / "measures.png", title=f"{folder.name}: {data}")
+    if cut_files:
+        from ..results.cuts import cut_png
+
+        for path, pos in cut_files:
+            cut_png(model, path, args.cut_normal, pos, title=f"{folder.name}: {data}")
     crimps = ", ".join(f"{f} {c:.2f} %" for f, c in measures["crimp_pct"].items())
     centre = measures.get("centreline_crimp_pct") or {}
     if centre:
@@ -51,6 +65,31 @@ def run(args) -> int:
             f"  thickness {1e3 * measures['thickness_m']:.3f} mm ({measures['measured_over']})\n"
             f"  crimp per fibre {crimps}\n"
             f"  fibre volume fraction {measures['fibre_volume_fraction']:.3f}\n"
-            f"  written {out} and {folder / 'measures.png'}")
+            f"  written {out} and {folder / 'measures.png'}"
+            + "".join(f"\n  cut {p} (+ .csv)" for p, _ in cut_files))
     emit(measures, args.json, text)
     return 0
+
+
+def _check_cuts(model, folder: Path, args) -> list[tuple[Path, float]]:
+    """``(image path, position [m])`` of every ``--cut-at``; raises InputError for a position
+    that is not a length or lies outside the fabric."""
+    if not args.cut_at:
+        return []
+    from ..analysis import FabricFrame, fabric_cut
+    from ..errors import InputError
+    from ..results.cuts import cut_label
+    from ..units import quantity
+
+    frame = FabricFrame.from_model(model)
+    out = []
+    for text in args.cut_at:
+        pos = quantity(text, "length", "--cut-at")
+        try:
+            fabric_cut(frame, args.cut_normal, pos)
+        except InputError as exc:
+            hint = "" if any(c.isalpha() for c in str(text)) else \
+                " (a bare number is in metres: write e.g. 5mm)"
+            raise InputError(f"--cut-at {text}: {exc}{hint}") from None
+        out.append((folder / f"cut_{cut_label(args.cut_normal, pos)}.png", pos))
+    return out

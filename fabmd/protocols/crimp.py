@@ -13,7 +13,8 @@ steps.
 Outputs in the run folder: ``crimped.data`` + ``crimped.json`` (the as-woven
 bead model, reusable by the test protocols), ``history.dat``/``history.csv``,
 ``summary.json`` (loose and crimped measures), ``history.png``,
-``sections.png`` (top view and cross-sections along warp and weft) and the
+``sections.png`` (top view and cuts along warp and weft), ``cuts/`` (one image and CSV
+per cut plane and the overview ``cuts.png``) and the
 trajectory of the ramp and the relaxation (``trajectory.h5``, ParaView files; the
 crimped state is its last frame).
 """
@@ -33,6 +34,7 @@ from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
+from ..results.cuts import cut_pngs
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import fabric_measures
 from ..results.plots import plot_curves
@@ -292,7 +294,8 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     write_csv(run_dir / "history.csv", history)
     ramp = crimp.ramp_steps(loose)
     preview_png(crimped, run_dir / "sections.png",
-                title="As-woven state after the crimp stage (sections along warp and weft)")
+                title="As-woven state after the crimp stage (cuts along warp and weft)")
+    cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
     plot_curves(run_dir / "history.png", [
         {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
     ], "time step", "thickness [mm]", title="Crimp: thickness during ramp and relaxation",
