@@ -244,7 +244,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
          "series": [{"x": 1e3 * d, "y": force, "label": "clamp force"}],
          "xlabel": "displacement d [mm]", "ylabel": "force [N]", "title": "Bias extension",
          "notes": f"H {1e3 * h:.1f} mm, W {1e3 * w:.1f} mm"
-                  f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
+                  f"\nKE/U after start-up <= {'n/a' if ke is None else f'{ke:.3g}'}"
                   f"\n{model.n_beads} beads"},
         {"path": "shear_angle.png",
          "series": [{"x": 1e3 * d, "y": gamma, "label": "closed form (L0 = H - W)"},

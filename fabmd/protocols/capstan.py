@@ -258,7 +258,7 @@ class CapstanResult(RunResult):
             {"x": u, "y": c["ratio"][pulling], "label": "T_out / T_in"},
             {"x": u, "y": np.full_like(u, s["expected_ratio"]), "label": "exp(μθ)",
              "style": ":"},
-        ], "pulled-end displacement [mm]", "T_out / T_in",
+        ], "pulled-end displacement [mm]", "T_out / T_in [–]",
             title=f"Capstan, μ = {s['mu']:g}, θ = {math.degrees(s['theta_rad']):.0f}°",
             notes=f"measured {s['measured_ratio']:.4f}\nexpected {s['expected_ratio']:.4f}\n"
                   f"rel. error {s['rel_error']:.2e}")

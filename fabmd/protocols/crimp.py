@@ -298,8 +298,12 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
     plot_curves(run_dir / "history.png", [
         {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
-    ], "time step", "thickness [mm]", title="Crimp: thickness during ramp and relaxation",
-        notes=f"ramp ends at step {ramp}\nquasi-static: {settled}")
+    ], "time step [–]", "thickness [mm]", title="Crimp: thickness during ramp and relaxation",
+        notes=f"{end.sentence()}\nKE/U at the end {final_ke:.3g}"
+              f" (limit {qs.kinetic_ratio:.3g})",
+        marks=[{"kind": "vline", "x": ramp, "label": f"ramp ends (step {ramp:,})"},
+               {"kind": "vline", "x": steps, "style": "-",
+                "label": f"LAMMPS stopped (step {steps:,}): {end.stopped_by}"}])
     summary = {
         "protocol": PROTOCOL,
         "expansion": crimp.expansion,

@@ -957,22 +957,31 @@ def shape_png(path: Path, model: BeadModel, final: BeadModel, g: DrapeGeometry,
     ax.set_aspect("equal")
     ax.set_xlabel("x (warp) [mm]")
     ax.set_ylabel("y (weft) [mm]")
-    ax.legend(frameon=False, fontsize=8, loc="upper right")
-    ax.set_title("Draped blank, top view")
+    ax.set_title("Draped blank, top view", fontsize=10)
     band = np.abs(p0[:, 1]) < g.spacing_m
     bx.scatter(1e3 * p[band, 0], 1e3 * p[band, 2], s=1.0, c="tab:blue", label="fabric")
     zc = g.punch_z_m - travel
-    t = np.linspace(-np.pi / 2 - 1.2, -np.pi / 2 + 1.2, 200)
+    # the punch over the modelled part only (x >= 0 for a quarter model)
+    t = np.linspace(-np.pi / 2 if g.quarter else -np.pi / 2 - 1.2, -np.pi / 2 + 1.2, 200)
     bx.plot(1e3 * g.radius_m * np.cos(t), 1e3 * (zc + g.radius_m * np.sin(t)), "k-", lw=1.0,
             label="punch")
     lo = 0.0 if g.quarter else -hx
     for side in ((lo, -g.die_radius_m), (g.die_radius_m, hx)) if not g.quarter else \
             ((g.die_radius_m, hx),):
-        bx.plot(1e3 * np.asarray(side), [1e3 * g.z_die_m] * 2, "r-", lw=1.5)
+        bx.plot(1e3 * np.asarray(side), [1e3 * g.z_die_m] * 2, "r-", lw=1.5,
+                label="die" if side[1] == hx else None)
     bx.set_aspect("equal")
     bx.set_xlabel("x (warp) [mm]")
     bx.set_ylabel("z [mm]")
-    bx.set_title("Section along the warp (|y0| < one spacing)")
-    bx.legend(frameon=False, fontsize=8)
+    bx.set_title("Section along the warp\n(beads starting within one spacing of y = 0)",
+                 fontsize=10)
+    # one legend below both panels: never on the fibres
+    handles, labels = [], []
+    for a in (ax, bx):
+        h, lab = a.get_legend_handles_labels()
+        handles += h
+        labels += lab
+    fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), frameon=False,
+               fontsize=8, markerscale=4)
     fig.savefig(path, dpi=150)
     plt.close(fig)

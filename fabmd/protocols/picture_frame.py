@@ -39,6 +39,7 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..results.curves import tangent_intersection, values_at
 from ..results.fibre_angles import fibre_shear_angles
+from ..results.figure import report_marks
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
@@ -387,8 +388,9 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     ke = summary["max_kinetic_to_strain_energy"]
     plot = {"path": "curve.png", "series": series, "xlabel": "shear angle γ [deg]",
             "ylabel": "normalised shear force [N/m]", "title": "Picture-frame shear",
+            "marks": report_marks(summary["normalised_force_at_angle_n_m"]),
             "notes": f"fabric {1e3 * g.fabric_length_m:.1f} mm, frame "
                      f"{1e3 * g.frame_length_m:.1f} mm, preload {test.pretension_strain:g}"
-                     f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
+                     f"\nKE/U after start-up <= {'n/a' if ke is None else f'{ke:.3g}'}"
                      f"\n{model.n_beads} beads"}
     return DrivenResult(Path(run_dir), curve, summary, [plot])

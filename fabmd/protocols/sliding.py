@@ -206,7 +206,7 @@ class SlidingResult(RunResult):
         plot_curves(self.run_dir / "curve.png", [
             {"x": x, "y": c["friction_ratio"], "label": "F_t / F_n"},
             {"x": x, "y": np.full_like(x, s["mu"]), "label": "μ", "style": ":"},
-        ], "slide distance [bead spacings]", "F_t / F_n",
+        ], "slide distance [bead spacings]", "F_t / F_n [–]",
             title=f"Fibre sliding across a fibre, s/d = {s['spacing_ratio']:g}",
             notes=f"mean {s['measured_ratio']:.4f} (μ = {s['mu']:g})\n"
                   f"ripple {s['ratio_min']:.3f} .. {s['ratio_max']:.3f}")

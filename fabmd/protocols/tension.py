@@ -187,6 +187,28 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
             "xlabel": "elongation [%]", "ylabel": "force per width [N/m]",
             "title": "Uniaxial tension",
             "notes": f"gauge {1e3 * gauge:.1f} mm, width {1e3 * width:.1f} mm"
-                     f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
-                     f"\n{coupon.n_beads} beads"}
+                     f"\nKE/U after start-up <= {'n/a' if ke is None else f'{ke:.3g}'}"
+                     f"\n{coupon.n_beads:,} beads",
+            "marks": tension_marks(fit, width, summary["force_at_elongation_n"],
+                                   float(100 * elongation.max()))}
     return TensionResult(Path(run_dir), curve, summary, [plot])
+
+
+def tension_marks(fit: dict, width_m: float, report: dict, max_pct: float) -> list[dict]:
+    """The summary's quantities on the force-per-width curve: the fitted tangents, the
+    transition between them and the report points."""
+    marks = []
+    xb, yb = fit["break_x"], fit["break_y"]
+    if xb is not None and np.isfinite(xb) and 0 < xb < max_pct:
+        yb /= width_m
+        for name, slope, x_end in (("initial", fit["initial_slope"], 0.0),
+                                   ("final", fit["final_slope"], max_pct)):
+            k = slope / width_m  # N/m per % elongation
+            marks.append({"kind": "line", "x": [x_end, xb], "y": [yb + k * (x_end - xb), yb],
+                          "label": f"{name} tangent {100 * k:.3g} N/m per unit strain"})
+        marks.append({"kind": "vline", "x": xb, "label": f"transition {xb:.3g} %"})
+    points = [(float(x), v / width_m) for x, v in report.items() if v is not None]
+    if points:
+        marks.append({"kind": "point", "x": [p[0] for p in points],
+                      "y": [p[1] for p in points], "label": "report points"})
+    return marks

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..engine import mpi
+from . import figure
 
 
 def _pyplot():
@@ -26,45 +27,41 @@ def _pyplot():
 
 
 def curves_figure(series: list[dict], xlabel: str, ylabel: str, title: str = "",
-                  notes: str = ""):
+                  notes: str = "", marks: list[dict] | None = None):
     """A matplotlib figure of one or more curves (for notebooks; see :func:`plot_curves`).
 
     Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``, ``lw``.
-    Axis labels should carry units, e.g. ``"strain [%]"``.
+    Axis labels carry units, e.g. ``"strain [%]"``. Title, legend, notes and ``marks``
+    (the summary's quantities on the curve) are laid out by :mod:`fabmd.results.figure`:
+    nothing covers the data.
     """
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+    fig, ax = plt.subplots(figsize=figure.FIGSIZE_IN, layout="constrained")
     for s in series:
         ax.plot(np.asarray(s["x"]), np.asarray(s["y"]), s.get("style", "-"),
                 label=s.get("label"), lw=s.get("lw", 1.6))
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    if title:
-        ax.set_title(title)
-    ax.grid(True, alpha=0.3)
-    if any(s.get("label") for s in series):
-        ax.legend(frameon=False)
-    if notes:
-        ax.text(0.02, 0.98, notes, transform=ax.transAxes, va="top", ha="left", fontsize=8,
-                family="monospace")
+    figure.finish(fig, ax, title, notes, marks)
     return fig
 
 
 def plot_curves(path: Path, series: list[dict], xlabel: str, ylabel: str, title: str = "",
-                notes: str = "") -> Path | None:
+                notes: str = "", marks: list[dict] | None = None) -> Path | None:
     """Plot one or more curves into ``path`` (rank 0 only).
 
-    Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``.
+    Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``; ``marks``
+    see :mod:`fabmd.results.figure`.
     """
     if not mpi.is_root():
         return None
-    fig = curves_figure(series, xlabel, ylabel, title, notes)
+    fig = curves_figure(series, xlabel, ylabel, title, notes, marks)
     return _save(fig, path)
 
 
 def _save(fig, path: Path) -> Path:
     plt = _pyplot()
-    fig.savefig(path, dpi=150)
+    fig.savefig(path, dpi=figure.DPI)
     plt.close(fig)
     return Path(path)
 
