@@ -176,6 +176,7 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
                "test_summary": result.summary}
     if crimp_result is not None:
         summary["crimped"] = crimp_result.summary.get("crimped")
+        summary["crimp_stop"] = crimp_result.summary.get("stop")
     if coupon_result is not None:
         summary["coupon"] = coupon_result.summary.get("relaxed_state")
     if mpi.is_root():

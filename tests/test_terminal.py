@@ -25,3 +25,32 @@ def test_a_warning_is_one_fabmd_line(monkeypatch, capsys):
         assert cli.main(["probe"]) == 0
     err = capsys.readouterr().err
     assert err == "fabmd: warning: largest overlap 0.12 d is above the limit\n"
+
+
+def test_numbers_carry_3_to_4_digits_and_the_key_s_unit():
+    from fabmd.cli.report import energy_line, quasi_static_line, value_text
+
+    assert value_text("fibre_volume_fraction", 0.14804596345200766) == "0.148"
+    assert value_text("gauge_length_m", 0.016) == "16 mm"
+    assert value_text("max_force_n", 12.3456789) == "12.35 N"
+    assert value_text("clamp_speed_m_s", 1e-4) == "0.0001 m/s"
+    assert value_text("steps", 11500) == "11,500"
+    assert quasi_static_line({"ok": False, "problems": ["a > b"]}) == "quasi-static: NO (a > b)"
+    line = energy_line({"external_work_j": 2.0, "strain_energy_change_j": 1.5,
+                        "damping_dissipation_j": 0.49, "contact_work_j": 0.0,
+                        "relative_error": 0.005})
+    assert line.startswith("energy balance: external work 2 J") and "0.5 %" in line
+
+
+def test_stage_header_counts_beads_and_steps(tmp_path):
+    from fabmd.engine.estimate import SECONDS_PER_BEAD_STEP, stage_header
+
+    from .fabrics import plain_weave_cell
+
+    model = plain_weave_cell()
+    model.save(tmp_path, stem="model")
+    (tmp_path / "in.x").write_text("read_data model.data\nrun 1000\nrun 500 # relax\n")
+    text = stage_header(tmp_path, "in.x", "crimp", ranks=2)
+    assert text.startswith(f"crimp: {model.n_beads:,} beads, up to 1,500 steps")
+    seconds = SECONDS_PER_BEAD_STEP * model.n_beads * 1500 / 2
+    assert f"{seconds:.2g} s on 2 ranks" in text

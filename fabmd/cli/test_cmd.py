@@ -35,11 +35,21 @@ def run(args) -> int:
     summary = run_test(scene, args.name, args.out, engine=engine, overwrite=args.overwrite,
                        check_rate=args.check_rate, resume=args.resume, crimped=args.crimped)
     s = summary["test_summary"]
-    lines = [f"{args.name} of {scene.source}: {summary['coupon_beads']} beads"]
+    from .report import energy_line, quasi_static_line, value_text
+
+    beads = s.get("n_beads", summary["coupon_beads"])
+    whole = "" if beads == summary["coupon_beads"] else \
+        f" (specimen {summary['coupon_beads']:,} beads; the model runs part of it)"
+    lines = [f"{args.name} of {scene.source}: {beads:,} beads{whole}"]
+    if summary.get("crimp_stop"):
+        lines.append(f"  crimp: {summary['crimp_stop']}")
+    stage = [text for text in (quasi_static_line(s.get("quasi_static")),
+                               energy_line(s.get("energy_balance"))) if text]
+    lines += [f"  {args.name}: {text}" for text in stage]
     for key in sorted(s):
         value = s[key]
         if isinstance(value, int | float | str) and not key.endswith("_note"):
-            lines.append(f"  {key:40s} {value}")
+            lines.append(f"  {key:40s} {value_text(key, value)}")
     lines.append(f"  results in {summary['results']}")
     emit(summary, args.json, "\n".join(lines))
     return 0

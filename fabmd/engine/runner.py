@@ -10,6 +10,7 @@ error into :class:`fabmd.errors.SimulationFailed` naming the run folder.
 from __future__ import annotations
 
 import json
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -83,6 +84,12 @@ class Engine:
         t0 = time.perf_counter()
         if resume and self.backend != "inprocess":
             raise InputError("resume needs the in-process back end (it writes the checkpoints)")
+        if self.progress and mpi.is_root() and not resume:  # what the stage will cost
+            from .estimate import stage_header
+
+            ranks = mpi.size() if self.backend == "inprocess" else self.ranks
+            print(stage_header(run_dir, input_name, label or input_name, ranks),
+                  file=sys.stderr, flush=True)
         if self.backend == "inprocess":
             bar = Progress(label or input_name) if self.progress and mpi.is_root() else None
             run_inprocess(run_dir, input_name, threads=self.threads, progress=bar,

@@ -1,0 +1,63 @@
+"""What a stage will cost, said before it starts: bead count, steps and a rough time.
+
+The time is a rough guide, not a promise: ``SECONDS_PER_BEAD_STEP`` is the cost of
+one bead for one step on one core of the 2-core development machine (LAMMPS-NOTES:
+``pair granular`` 28,672 beads x 500 steps in 1.96 s, ~1.4e-7 s; fabmd's monitors and
+outputs add some), divided by the MPI ranks. Relaxations that stop once quasi-static
+usually end well before their step budget, so the steps and time are upper bounds.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from .script import logical_lines, total_run_steps
+
+#: seconds per bead and step on one core (see the module docstring)
+SECONDS_PER_BEAD_STEP = 1.5e-7
+_READ_DATA = re.compile(r"^read_data\s+(\S+)")
+_ATOMS = re.compile(r"^\s*(\d+)\s+atoms\s*$")
+
+
+def data_file_atoms(path: Path) -> int | None:
+    """The atom count in a LAMMPS data file's header (None: not found)."""
+    try:
+        with open(path, errors="replace") as f:
+            for k, line in enumerate(f):
+                m = _ATOMS.match(line)
+                if m:
+                    return int(m.group(1))
+                if k > 50:
+                    break
+    except OSError:
+        return None
+    return None
+
+
+def _clock(seconds: float) -> str:
+    if seconds < 60:
+        return f"{seconds:.2g} s"
+    if seconds < 3600:
+        return f"{seconds / 60:.2g} min"
+    return f"{seconds / 3600:.2g} h"
+
+
+def stage_header(run_dir: Path, input_name: str, label: str, ranks: int = 1) -> str:
+    """``tension: 4,096 beads, up to 120,000 steps, rough cost up to 1.2 min on 1 rank``."""
+    commands = logical_lines((Path(run_dir) / input_name).read_text())
+    steps = total_run_steps(commands)
+    beads = None
+    for c in commands:
+        m = _READ_DATA.match(c)
+        if m:
+            beads = data_file_atoms(Path(run_dir) / m.group(1))
+            break
+    if beads is None:
+        return f"{label}: up to {steps:,} steps"
+    cost = SECONDS_PER_BEAD_STEP * beads * steps / max(1, ranks)
+    early = any(c.split()[:1] == ["fix"] and " halt " in f" {c} " and "quasi_static" in c
+                for c in commands)
+    return (f"{label}: {beads:,} beads, up to {steps:,} steps; rough cost up to "
+            f"{_clock(cost)} on {ranks} rank{'s' if ranks > 1 else ''}"
+            + (" (a relaxation stops once quasi-static: usually sooner)" if early else ""))
