@@ -57,15 +57,16 @@ def run(args) -> int:
     c = crimp.summary
     say(f"2. crimp (periodic cell, {c['crimped']['n_beads']} beads, {c['wall_s']:.1f} s): "
         f"thickness {1e3 * c['loose']['thickness_m']:.2f} -> "
-        f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp "
+        f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp (per fibre) "
         + ", ".join(f"{f} {v:.2f} %" for f, v in c["crimped"]["crimp_pct"].items())
-        + " -> crimp/sections.png")
+        + f"; {c.get('stop', '')} -> crimp/sections.png")
     tension = run_test(scene, "tension", out / "tension", engine=engine,
                        crimped=out / "crimp")
     t = tension["test_summary"]
     say(f"3. tension ({tension['coupon_beads']} beads, {t['wall_s']:.0f} s): initial stiffness "
-        f"{t['initial_stiffness_n_m_per_width']:.4g} N/m, after "
-        f"{t['transition_elongation_pct']:.2f} % {t['final_stiffness_n_m_per_width']:.4g} N/m; "
+        f"{t['initial_stiffness_n_m_per_width']:.4g} N/m per unit strain, after "
+        f"{t['transition_elongation_pct']:.3g} % {t['final_stiffness_n_m_per_width']:.4g} N/m "
+        f"per unit strain; "
         f"energy balance "
         f"{100 * t['energy_balance']['relative_error']:.2f} % -> tension/tension/curve.png")
     frame = run_test(scene, "picture-frame", out / "picture_frame", engine=engine,
