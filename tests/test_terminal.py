@@ -54,3 +54,22 @@ def test_stage_header_counts_beads_and_steps(tmp_path):
     assert text.startswith(f"crimp: {model.n_beads:,} beads, up to 1,500 steps")
     seconds = SECONDS_PER_BEAD_STEP * model.n_beads * 1500 / 2
     assert f"{seconds:.2g} s on 2 ranks" in text
+
+
+def test_test_command_summary_states_stages_and_the_beads_that_ran():
+    from fabmd.cli.test_cmd import summary_text
+
+    summary = {"coupon_beads": 37500, "results": "runs/drape/drape",
+               "crimp_stop": "stopped at step 3,500: quasi-static (criterion met)",
+               "test_summary": {"n_beads": 9374, "max_punch_force_n": 33.2468123,
+                                "quasi_static": {"ok": True, "problems": []},
+                                "energy_balance": {"external_work_j": 1.5,
+                                                   "relative_error": 0.0014}}}
+    text = summary_text("drape", "examples/drape.toml", summary)
+    lines = text.splitlines()
+    assert lines[0].startswith("drape of examples/drape.toml: 9,374 beads (specimen 37,500")
+    assert "  crimp: stopped at step 3,500: quasi-static (criterion met)" in lines
+    assert "  drape: quasi-static: yes" in lines
+    assert any(line.startswith("  drape: energy balance:") and "0.14 %" in line
+               for line in lines)
+    assert any(line.split() == ["max_punch_force_n", "33.25", "N"] for line in lines)

@@ -34,22 +34,28 @@ def run(args) -> int:
     engine = dataclasses.replace(engine_from(args), checkpoint_every=args.checkpoint_every)
     summary = run_test(scene, args.name, args.out, engine=engine, overwrite=args.overwrite,
                        check_rate=args.check_rate, resume=args.resume, crimped=args.crimped)
-    s = summary["test_summary"]
+    emit(summary, args.json, summary_text(args.name, scene.source, summary))
+    return 0
+
+
+def summary_text(name: str, source: str, summary: dict) -> str:
+    """The terminal summary of a pipeline run: bead count of the model that ran, per-stage
+    verdicts (crimp stop, quasi-static, energy balance), then every scalar with its unit."""
     from .report import energy_line, quasi_static_line, value_text
 
+    s = summary["test_summary"]
     beads = s.get("n_beads", summary["coupon_beads"])
     whole = "" if beads == summary["coupon_beads"] else \
         f" (specimen {summary['coupon_beads']:,} beads; the model runs part of it)"
-    lines = [f"{args.name} of {scene.source}: {beads:,} beads{whole}"]
+    lines = [f"{name} of {source}: {beads:,} beads{whole}"]
     if summary.get("crimp_stop"):
         lines.append(f"  crimp: {summary['crimp_stop']}")
     stage = [text for text in (quasi_static_line(s.get("quasi_static")),
                                energy_line(s.get("energy_balance"))) if text]
-    lines += [f"  {args.name}: {text}" for text in stage]
+    lines += [f"  {name}: {text}" for text in stage]
     for key in sorted(s):
         value = s[key]
         if isinstance(value, int | float | str) and not key.endswith("_note"):
             lines.append(f"  {key:40s} {value_text(key, value)}")
     lines.append(f"  results in {summary['results']}")
-    emit(summary, args.json, "\n".join(lines))
-    return 0
+    return "\n".join(lines)
