@@ -179,6 +179,7 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
         summary["crimp_stop"] = crimp_result.summary.get("stop")
     if coupon_result is not None:
         summary["coupon"] = coupon_result.summary.get("relaxed_state")
+        summary["coupon_stop"] = coupon_result.summary.get("stop")
     if mpi.is_root():
         write_json(out / "summary.json", summary)
     return summary

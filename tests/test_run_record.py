@@ -69,3 +69,12 @@ def test_crimp_that_spends_its_budget_says_so(tmp_path):
     assert s["steps"] == s["ramp_steps"] + budget  # every planned step was run
     assert any(issubclass(w.category, QuasiStaticWarning) for w in caught)
     assert np.isfinite(s["criterion"]["final_kinetic_ratio"])
+
+
+@pytest.mark.lammps
+def test_coupon_summary_states_where_its_relaxation_stopped(woven_coupon):
+    s = woven_coupon.summary
+    end = read_run_end(woven_coupon.run_dir, relaxation=True)
+    assert s["steps"] == end.final_step > 0
+    assert s["stop"] == end.sentence()
+    assert (end.stopped_by == "quasi-static") == bool(s["settled"])

@@ -48,8 +48,9 @@ def summary_text(name: str, source: str, summary: dict) -> str:
     whole = "" if beads == summary["coupon_beads"] else \
         f" (specimen {summary['coupon_beads']:,} beads; the model runs part of it)"
     lines = [f"{name} of {source}: {beads:,} beads{whole}"]
-    if summary.get("crimp_stop"):
-        lines.append(f"  crimp: {summary['crimp_stop']}")
+    for stage in ("crimp", "coupon"):
+        if summary.get(f"{stage}_stop"):
+            lines.append(f"  {stage}: {summary[f'{stage}_stop']}")
     stage = [text for text in (quasi_static_line(s.get("quasi_static")),
                                energy_line(s.get("energy_balance"))) if text]
     lines += [f"  {name}: {text}" for text in stage]

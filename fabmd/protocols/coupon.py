@@ -26,6 +26,7 @@ from ..model.contact import ContactModel
 from ..model.transform import cut, tile
 from ..results.folder import write_json
 from ..results.measure import fabric_measures
+from ..results.run_record import read_run_end
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
@@ -188,7 +189,11 @@ class Coupon:
                               f"{self.relax.max_steps} steps, the coupon is still moving: raise "
                               f"relax.max_steps, or check that the coupon holds together",
                               QuasiStaticWarning, stacklevel=2)
-            summary = {"relaxed": True, "settled": settled, "cut": fabric_measures(geometry),
+            end = read_run_end(run_dir, relaxation=True)  # where LAMMPS stopped, and why
+            summary = {"relaxed": True, "settled": settled,
+                       "steps": end.final_step if end else None,
+                       "stop": end.sentence() if end else None,
+                       "cut": fabric_measures(geometry),
                        "relaxed_state": fabric_measures(relaxed),
                        "overlap": overlap_summary(run_dir, self.contact),
                        "cohesion_links": int((~relaxed.fibre_bond_mask()).sum()),
