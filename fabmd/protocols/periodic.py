@@ -36,6 +36,7 @@ from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
+from ..results.figure import report_marks
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
@@ -240,7 +241,8 @@ class PeriodicTension(_PeriodicCellTest):
                 "series": [{"x": 100 * strain, "y": nxx, "label": "N_xx (virial)"}],
                 "xlabel": "strain [%]", "ylabel": "membrane force per width [N/m]",
                 "title": f"Periodic cell: tension (transverse {self.transverse})",
-                "notes": f"cell {1e3 * lx0:.2f} x {1e3 * ly0:.2f} mm\n{model.n_beads} beads"}
+                "notes": f"cell {1e3 * lx0:.2f} x {1e3 * ly0:.2f} mm\n{model.n_beads:,} beads",
+                "marks": report_marks(summary["force_per_width_at_strain_n_m"])}
         return DrivenResult(Path(run_dir), curve, summary, [plot])
 
 
@@ -330,5 +332,8 @@ class PeriodicShear(_PeriodicCellTest):
                             "label": "N_xy (virial)"}],
                 "xlabel": "shear angle γ [deg]", "ylabel": "shear force per length [N/m]",
                 "title": "Periodic cell: trellis shear",
-                "notes": f"cell {1e3 * lx0:.2f} x {1e3 * ly0:.2f} mm\n{model.n_beads} beads"}
+                "notes": f"cell {1e3 * lx0:.2f} x {1e3 * ly0:.2f} mm\n{model.n_beads:,} beads",
+                "marks": report_marks(summary["normalised_force_at_angle_n_m"])
+                + ([{"kind": "vline", "x": lock["x"], "label": f"locking {lock['x']:.3g}°"}]
+                   if lock["found"] else [])}
         return DrivenResult(Path(run_dir), curve, summary, [plot])
