@@ -139,3 +139,21 @@ def test_drape_figures(saved, tmp_path):
     saved.clear()
     Drape(**SMALL).run(blank, tmp_path / "drape", engine=Engine(progress=False))
     _clean(saved, {"curve.png", "holder_force.png", "shear_angle.png", "shape.png"})
+
+
+def test_demo_overview_figure(saved, tmp_path):
+    from fabmd.cli.demo import _overview
+    from fabmd.results.folder import write_csv
+
+    (tmp_path / "t").mkdir()
+    (tmp_path / "f").mkdir()
+    x = np.linspace(0, 3, 50)
+    write_csv(tmp_path / "t" / "curve.csv", {"elongation_pct": x,
+                                             "force_per_width_n_m": 1e4 * x**2})
+    g = np.linspace(0, 50, 50)
+    write_csv(tmp_path / "f" / "curve.csv", {"shear_angle_deg": g,
+                                             "normalised_force_n_m": np.exp(g / 10)})
+    _overview(tmp_path, {"results": str(tmp_path / "t"),
+                         "test_summary": {"transition_elongation_pct": 1.81}},
+              {"results": str(tmp_path / "f"), "test_summary": {"locking_angle_deg": 40.7}})
+    _clean(saved, {"demo.png"})

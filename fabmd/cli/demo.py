@@ -88,27 +88,29 @@ def run(args) -> int:
 
 def _overview(out: Path, tension: dict, frame: dict) -> None:
     """Both curves side by side in ``demo.png``."""
+    from ..results import figure
     from ..results.folder import read_csv
     from ..results.plots import _pyplot
 
     plt = _pyplot()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.4), layout="constrained")
     tc = read_csv(Path(tension["results"]) / "curve.csv")
-    a.plot(tc["elongation_pct"], tc["force_per_width_n_m"], lw=1.8)
+    a.plot(tc["elongation_pct"], tc["force_per_width_n_m"], lw=1.8, label="fabric")
     a.set_xlabel("elongation [%]")
     a.set_ylabel("force per width [N/m]")
-    a.set_title("Uniaxial tension")
-    a.grid(alpha=0.3)
+    a.set_title("Uniaxial tension", fontsize=10)
+    x = tension["test_summary"].get("transition_elongation_pct")
+    figure.finish(fig, a, marks=[{"kind": "vline", "x": x, "label": f"transition {x:.3g} %"}]
+                  if x is not None and 0 < x < float(tc["elongation_pct"].max()) else None)
     fc = read_csv(Path(frame["results"]) / "curve.csv")
-    b.plot(fc["shear_angle_deg"], fc["normalised_force_n_m"], lw=1.8)
+    b.plot(fc["shear_angle_deg"], fc["normalised_force_n_m"], lw=1.8, label="F_norm")
     lock = frame["test_summary"].get("locking_angle_deg")
-    if lock:
-        b.axvline(lock, ls="--", color="tab:orange", label=f"locking {lock:.1f}°")
-        b.legend(frameon=False)
     b.set_xlabel("shear angle γ [deg]")
     b.set_ylabel("normalised shear force [N/m]")
-    b.set_title("Picture-frame shear")
-    b.grid(alpha=0.3)
-    fig.suptitle("fabmd demo: plain weave, as-woven state from the crimp stage")
+    b.set_title("Picture-frame shear", fontsize=10)
+    figure.finish(fig, b, marks=[{"kind": "vline", "x": lock, "label": f"locking {lock:.3g}°"}]
+                  if lock else None)
+    fig.suptitle(figure.wrap_title("fabmd demo: plain weave, as-woven state from the crimp "
+                                   "stage", fig.get_figwidth()))
     fig.savefig(out / "demo.png", dpi=150)
     plt.close(fig)
