@@ -157,3 +157,32 @@ def test_demo_overview_figure(saved, tmp_path):
                          "test_summary": {"transition_elongation_pct": 1.81}},
               {"results": str(tmp_path / "f"), "test_summary": {"locking_angle_deg": 40.7}})
     _clean(saved, {"demo.png"})
+
+
+@pytest.mark.lammps
+def test_fibre_tension_figure(saved, tmp_path):
+    from fabmd.model.material import GLASS, VirtualFibre
+    from fabmd.protocols.fibre_tension import FibreTension
+
+    fibre = VirtualFibre.solid(GLASS, 0.5e-3)
+    FibreTension(fibre=fibre, length_m=5e-3).run(tmp_path / "ft",
+                                                 engine=Engine(progress=False))
+    _clean(saved, {"curve.png"})
+
+
+@pytest.mark.lammps
+@pytest.mark.slow
+def test_picture_frame_figure(saved, tmp_path):
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.crimp import Crimp
+    from fabmd.protocols.picture_frame import PictureFrame
+
+    engine = Engine(progress=False)
+    crimped = Crimp(expansion={"warp": -0.02, "weft": -0.02}).run(
+        plain_weave_cell(spacing_m=1e-3, gap=1.0), tmp_path / "crimp", engine=engine)
+    square = Coupon(length_m=6e-3, width_m=6e-3, relax=None).run(
+        crimped.model, tmp_path / "coupon", engine=engine).model
+    saved.clear()
+    result = PictureFrame(max_shear_angle_deg=20).run(square, tmp_path / "pf", engine=engine)
+    _clean(saved, {"curve.png"})
+    assert any(m["label"] == "report points" for m in result.plots[0]["marks"])
