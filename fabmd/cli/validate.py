@@ -46,10 +46,13 @@ def run(args) -> int:
     settings = parse_settings(args.set)
     result = module.check(out=args.out, engine=engine_from(args), overwrite=args.overwrite,
                           settings=settings)
+    from .report import value_text
+
     lines = [f"{args.check}: {'PASSED' if result['passed'] else 'FAILED'}"]
     for key, value in result.items():
         if key not in ("check", "passed", "cases"):
-            lines.append(f"  {key:32s} {value}")
+            shown = value_text(key, value) if isinstance(value, int | float) else value
+            lines.append(f"  {key:32s} {shown}")
     for case in result.get("cases", []):
         lines.append("  " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
                                       for k, v in case.items()))
