@@ -87,6 +87,11 @@ def test_measure_cut_at_writes_the_cut_of_the_plane(fabric, tmp_path):
     ids = sorted(int(r["bead_id"]) - 1 for r in rows)
     assert ids == sorted(_expected(fabric, 0, 5e-3).tolist())
     assert all(abs(float(r["distance_m"])) <= 0.5 * float(r["diameter_m"]) for r in rows)
+    two = run_cli("measure", str(folder), "--cut-at", "2mm", "--cut-at", "3.5 mm",
+                  "--cut-normal", "y", "--overwrite", timeout=300)
+    assert two.returncode == 0, two.stderr
+    assert {"cut_y_2mm.png", "cut_y_3.5mm.png", "cuts.png"} <= {p.name for p in
+                                                                folder.iterdir()}
     bad = run_cli("measure", str(folder), "--cut-at", "5", "--overwrite", timeout=300)
     assert bad.returncode == 2 and "outside the fabric" in bad.stderr
     assert "5mm" in bad.stderr  # says how to write it

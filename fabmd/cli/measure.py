@@ -51,11 +51,15 @@ def run(args) -> int:
     measures["cuts"] = [p.name for p, _ in cut_files]
     write_json(out, measures)
     preview_png(model, folder / "measures.png", title=f"{folder.name}: {data}")
-    if cut_files:
-        from ..results.cuts import cut_png
+    if cut_files:  # one image per position (+ a grid overview cuts.png of several)
+        from ..results.cuts import cut_png, cut_pngs
 
-        for path, pos in cut_files:
+        if len(cut_files) == 1:
+            path, pos = cut_files[0]
             cut_png(model, path, args.cut_normal, pos, title=f"{folder.name}: {data}")
+        else:
+            cut_pngs(model, folder, [(args.cut_normal, pos) for _, pos in cut_files],
+                     title=f"{folder.name}: {data}")
     crimps = ", ".join(f"{f} {c:.2f} %" for f, c in measures["crimp_pct"].items())
     centre = measures.get("centreline_crimp_pct") or {}
     if centre:
