@@ -146,8 +146,8 @@ def test_tight_bends_and_overlaps_are_refused_naming_yarns():
     # crossing yarns pressed together: no clearance and a flat wave
     squeezed = dataclasses.replace(plain(n_fibres=7), clearance_m=0.0, plateau=0.0)
     squeezed = dataclasses.replace(squeezed, warp=dataclasses.replace(
-        squeezed.warp, height_m=0.2e-3), weft=dataclasses.replace(squeezed.weft,
-                                                                   height_m=0.2e-3))
+        squeezed.warp, height_m=0.2e-3, linear_density_tex=300),
+        weft=dataclasses.replace(squeezed.weft, height_m=0.2e-3, linear_density_tex=300))
     with pytest.raises(InputError) as err:
         render_fabric(squeezed)
     msg = str(err.value)

@@ -19,8 +19,9 @@ thickness, the fabric's mid-plane is z = 0 and the unit cell starts at x = y = 0
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,7 +31,7 @@ from ..model.material import FibreMaterial
 from ..units import TEX, quantity
 from .architecture3d import Architecture3D
 from .paths import YarnPath
-from .section import Section
+from .section import Section, section_height
 from .weave import Weave
 
 FAMILIES = ("warp", "weft", "binder")
@@ -38,29 +39,56 @@ FAMILIES = ("warp", "weft", "binder")
 FAMILY_AXIS = {"warp": 0, "weft": 1, "binder": 0}
 
 
+#: largest yarn fibre volume fraction (filament area / section area) a yarn may have
+PACKING_LIMIT = 0.8
+#: filament count × filament area may differ this much from tex/ρ before a datasheet
+#: is refused as inconsistent
+FILAMENT_TOLERANCE = 0.1
+#: a datasheet areal density may fall this much short of the straight yarns' mass
+AREAL_DENSITY_TOLERANCE = 0.03
+#: and exceed it by at most this mean crimp
+MAX_DATASHEET_CRIMP = 0.3
+
+
 @dataclass(frozen=True)
 class YarnSpec:
-    """One yarn family.
+    """One yarn family (or, from a datasheet, its tex, fibre and packing).
 
     Args:
         linear_density_tex: linear density [tex = g/km] (accepts "1200 tex", "1.2 ktex").
         material: filament material.
-        width_m: section width in the fabric plane [m] (accepts "2 mm").
+        width_m: section width in the fabric plane [m] (accepts "2 mm"); default:
+            the yarn spacing (a dense fabric whose yarns fill their spacing).
         n_fibres: virtual fibres per yarn (>= 1; 1, 7, 19, 37, 61 are full hexagons).
-        height_m: section height [m]; default = width (circular section).
+        height_m: section height [m]; default: the height at which the section holds
+            the filament area tex/ρ at ``fibre_volume_fraction``, or = width (circle)
+            when that is not given.
         spacing_m: distance between neighbouring yarns of this family [m].
         count_per_m: or yarns per length [1/m] (accepts "4 ends/cm", "3 picks/cm").
         name: label of the family's yarn type in outputs.
+        shape: section shape, ``"ellipse"``, ``"lenticular"`` or ``"racetrack"``.
+        fibre_volume_fraction: the packing the section is sized for (filament area
+            over section area, in (0, 0.8]); used when ``height_m`` is left out.
+        filament_diameter_m: diameter of one filament [m] (datasheet; "7 um").
+        filament_count: filaments per yarn (datasheet; "3K" = 3000). With the
+            diameter, count·π·d²/4 must agree with tex/ρ within 10 %.
+
+    Every yarn's filament area tex/ρ must fit its section at a yarn fibre volume
+    fraction of at most :data:`PACKING_LIMIT`.
     """
 
     linear_density_tex: float
     material: FibreMaterial
-    width_m: float
+    width_m: float | None = None
     n_fibres: int = 7
     height_m: float | None = None
     spacing_m: float | None = None
     count_per_m: float | None = None
     name: str = ""
+    shape: str = "ellipse"
+    fibre_volume_fraction: float | None = None
+    filament_diameter_m: float | None = None
+    filament_count: int | None = None
 
     def __post_init__(self):
         tex = self.linear_density_tex
@@ -71,11 +99,11 @@ class YarnSpec:
         if not isinstance(self.material, FibreMaterial):
             raise InputError(f"yarn.material must be a FibreMaterial, got {self.material!r}")
         object.__setattr__(self, "n_fibres", inputs.positive_int("yarn.n_fibres", self.n_fibres))
-        section = Section(self.width_m, self.height_m)
-        object.__setattr__(self, "width_m", section.width_m)
-        object.__setattr__(self, "height_m", section.height_m)
         if self.spacing_m is not None and self.count_per_m is not None:
-            raise InputError("give yarn.spacing_m or yarn.count_per_m, not both")
+            if isinstance(self.spacing_m, str) or isinstance(self.count_per_m, str) \
+                    or not math.isclose(self.spacing_m * self.count_per_m, 1.0, rel_tol=1e-9):
+                raise InputError("give yarn.spacing_m or yarn.count_per_m, not both")
+            object.__setattr__(self, "spacing_m", None)  # a copy: count_per_m sets it again
         if self.spacing_m is not None:
             object.__setattr__(self, "spacing_m", inputs.positive(
                 "yarn.spacing_m", quantity(self.spacing_m, "length", "yarn.spacing_m")))
@@ -84,10 +112,77 @@ class YarnSpec:
                 self.count_per_m, "count_per_length", "yarn.count_per_m"))
             object.__setattr__(self, "count_per_m", count)
             object.__setattr__(self, "spacing_m", 1.0 / count)
+        self._check_filaments()
+        width = self.width_m
+        if width is None:
+            if self.spacing_m is None:
+                raise InputError("yarn.width_m is needed when the yarn has no spacing_m or "
+                                 "count_per_m (the default width is the spacing)")
+            width = self.spacing_m
+        width = inputs.positive("yarn.width_m", quantity(width, "length", "yarn.width_m"))
+        height = self.height_m
+        if self.fibre_volume_fraction is not None:
+            vf = inputs.in_range("yarn.fibre_volume_fraction", self.fibre_volume_fraction,
+                                 0.0, PACKING_LIMIT, low_open=True)
+            object.__setattr__(self, "fibre_volume_fraction", float(vf))
+            if height is None:
+                height = section_height(self.filament_area_m2 / vf, width, self.shape)
+        section = Section(width, height, self.shape)
+        object.__setattr__(self, "width_m", section.width_m)
+        object.__setattr__(self, "height_m", section.height_m)
+        vf = self.yarn_fibre_volume_fraction
+        if vf > PACKING_LIMIT:
+            raise InputError(
+                f"yarn{' ' + self.name if self.name else ''}: filament area "
+                f"{1e6 * self.filament_area_m2:.4g} mm² ({self.linear_density_tex:g} tex / "
+                f"{self.material.density_kg_m3:g} kg/m³) in its {1e3 * self.width_m:.4g} x "
+                f"{1e3 * self.height_m:.4g} mm {self.shape} section "
+                f"({1e6 * section.area_m2:.4g} mm²) is a yarn fibre volume fraction of "
+                f"{vf:.3g}, above the packing limit {PACKING_LIMIT:g}: enlarge the section "
+                f"(height_m, width_m) or leave height_m out and give fibre_volume_fraction")
+
+    def _check_filaments(self) -> None:
+        d, n = self.filament_diameter_m, self.filament_count
+        if d is not None:
+            d = inputs.positive("yarn.filament_diameter_m",
+                                quantity(d, "length", "yarn.filament_diameter_m"))
+            object.__setattr__(self, "filament_diameter_m", d)
+        if n is not None:
+            if isinstance(n, str) and n.strip().upper().endswith("K"):
+                try:
+                    n = int(round(float(n.strip()[:-1]) * 1000))
+                except ValueError:
+                    raise InputError(f"yarn.filament_count must be a number or like "
+                                     f"'3K', got {self.filament_count!r}") from None
+            object.__setattr__(self, "filament_count", inputs.positive_int(
+                "yarn.filament_count", n))
+            n = self.filament_count
+        if d is None or n is None:
+            return
+        area = n * math.pi * d * d / 4.0
+        ratio = area / self.filament_area_m2
+        if abs(ratio - 1.0) > FILAMENT_TOLERANCE:
+            raise InputError(
+                f"yarn datasheet is inconsistent: {n} filaments x pi/4 x "
+                f"({1e6 * d:.3g} um)² = {1e6 * area:.4g} mm² but {self.linear_density_tex:g} "
+                f"tex / {self.material.density_kg_m3:g} kg/m³ = "
+                f"{1e6 * self.filament_area_m2:.4g} mm² ({100 * (ratio - 1):+.0f} %, allowed "
+                f"±{100 * FILAMENT_TOLERANCE:.0f} %): check tex, fibre density, filament "
+                f"diameter or count")
+
+    @property
+    def filament_area_m2(self) -> float:
+        """Filament cross-section of the yarn, tex·1e-6/ρ [m²]."""
+        return self.linear_density_tex * TEX / self.material.density_kg_m3
+
+    @property
+    def yarn_fibre_volume_fraction(self) -> float:
+        """Filament area over section area (the yarn's packing)."""
+        return self.filament_area_m2 / self.section.area_m2
 
     @property
     def section(self) -> Section:
-        return Section(self.width_m, self.height_m)
+        return Section(self.width_m, self.height_m, self.shape)
 
     @property
     def linear_density_kg_m(self) -> float:
@@ -112,6 +207,17 @@ class Fabric:
             of the smallest yarn height.
         plateau: fraction of a crossed yarn's half-width over which a crimped
             yarn stays level, in [0, 1) (0: pure cosine waves).
+        areal_density_kg_m2: datasheet areal density [kg/m²] (accepts "200 g/m2");
+            checked against the straight yarns' mass Σ tex·count (it may exceed it
+            by the crimp, at most :data:`MAX_DATASHEET_CRIMP`, and fall short by at
+            most :data:`AREAL_DENSITY_TOLERANCE`) and reported against the built one.
+        thickness_m: datasheet thickness [m] (stored and reported; calibration uses it).
+        thickness_pressure_pa: the pressure the thickness is quoted at [Pa].
+        auto_clearance: choose the loose state for a dense fabric (scene files:
+            ``clearance_m = "auto"``): 2D yarns wider than their spacing less the
+            clearance are built narrower and taller (same area; the crimp stage
+            spreads them), and the build raises the clearance (×1.5 per try) until
+            no yarns overlap (the crimp stage compacts them).
     """
 
     architecture: Weave | Architecture3D
@@ -122,6 +228,12 @@ class Fabric:
     periodic: bool = False
     clearance_m: float | None = None
     plateau: float = 0.5
+    areal_density_kg_m2: float | None = None
+    thickness_m: float | None = None
+    thickness_pressure_pa: float | None = None
+    auto_clearance: bool = False
+    #: per family, the width given for the woven yarn where the loose one is narrower [m]
+    woven_width_m: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
         arch = self.architecture
@@ -153,6 +265,12 @@ class Fabric:
                                             inputs.positive_int("fabric.tiling[1]", tiling[1])))
         if not isinstance(self.periodic, bool):
             raise InputError(f"fabric.periodic must be true or false, got {self.periodic!r}")
+        if isinstance(self.clearance_m, str) and self.clearance_m.strip() == "auto":
+            object.__setattr__(self, "auto_clearance", True)
+            object.__setattr__(self, "clearance_m", None)
+        if not isinstance(self.auto_clearance, bool):
+            raise InputError(f"fabric.auto_clearance must be true or false, "
+                             f"got {self.auto_clearance!r}")
         if self.clearance_m is None:
             object.__setattr__(self, "clearance_m",
                                0.1 * min(s.height_m for s in self.specs().values()))
@@ -161,7 +279,65 @@ class Fabric:
                 "fabric.clearance_m", quantity(self.clearance_m, "length",
                                                "fabric.clearance_m")))
         inputs.in_range("fabric.plateau", self.plateau, 0.0, 1.0, high_open=True)
+        object.__setattr__(self, "woven_width_m", dict(self.woven_width_m))  # own copy
+        self._datasheet()
+        if self.auto_clearance and not self.is_3d:
+            self._narrow_loose_yarns()
         self._check_fit()
+
+    def _datasheet(self) -> None:
+        for name, kind in (("areal_density_kg_m2", "areal_density"), ("thickness_m", "length"),
+                           ("thickness_pressure_pa", "pressure")):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, inputs.positive(
+                    f"fabric.{name}", quantity(value, kind, f"fabric.{name}")))
+        if self.thickness_pressure_pa is not None and self.thickness_m is None:
+            raise InputError("fabric.thickness_pressure_pa is given without "
+                             "fabric.thickness_m")
+        target = self.areal_density_kg_m2
+        if target is None:
+            return
+        parts = self.straight_areal_density_kg_m2()
+        straight = sum(parts.values())
+        crimp = target / straight - 1.0
+        terms = " + ".join(
+            f"{fam} {self.specs()[fam].linear_density_tex:g} tex x "
+            f"{1e-3 * parts[fam] / (self.specs()[fam].linear_density_kg_m):.4g} m/m² "
+            f"= {1e3 * parts[fam]:.4g} g/m²" for fam in parts)
+        if crimp < -AREAL_DENSITY_TOLERANCE or crimp > MAX_DATASHEET_CRIMP:
+            why = ("lighter than its straight yarns" if crimp < 0 else
+                   f"heavier than its straight yarns by more than "
+                   f"{100 * MAX_DATASHEET_CRIMP:.0f} % crimp")
+            raise InputError(
+                f"fabric datasheet is inconsistent: areal density {1e3 * target:.4g} g/m² is "
+                f"{why}: {terms}, total {1e3 * straight:.4g} g/m² (implied mean crimp "
+                f"{100 * crimp:+.1f} %); check tex, ends/picks per cm and areal density")
+
+    def straight_areal_density_kg_m2(self) -> dict[str, float]:
+        """Per family, the mass per fabric area of its yarns laid straight, Σ tex·count [kg/m²]."""
+        lx, ly = self.unit_cell_m
+        counts = self.yarns_per_unit_cell()
+        out = {}
+        for fam, spec in self.specs().items():
+            along = lx if FAMILY_AXIS[fam] == 0 else ly
+            out[fam] = spec.linear_density_kg_m * counts[fam] * along / (lx * ly)
+        return out
+
+    def _narrow_loose_yarns(self) -> None:
+        c = self.clearance_m
+        for fam in ("warp", "weft"):
+            spec = getattr(self, fam)
+            room = spec.spacing_m - c
+            if spec.width_m <= room * (1 + 1e-12):
+                continue
+            if room <= 0:
+                raise InputError(f"yarns.{fam}: the clearance {c:g} m leaves no room in its "
+                                 f"spacing {spec.spacing_m:g} m")
+            height = section_height(spec.section.area_m2, room, spec.shape)
+            self.woven_width_m.setdefault(fam, spec.width_m)
+            object.__setattr__(self, fam, dataclasses.replace(
+                spec, width_m=room, height_m=height, fibre_volume_fraction=None))
 
     # -- derived -----------------------------------------------------------------------
     @property

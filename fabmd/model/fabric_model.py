@@ -23,6 +23,7 @@ need in ``BeadModel.info`` (see :func:`render_fabric`).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -92,8 +93,40 @@ def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads]) -> None:
                 f"{path.family} height")
 
 
+#: tries of the loose-state search of ``Fabric.auto_clearance`` (clearance ×1.5 each)
+AUTO_CLEARANCE_TRIES = 12
+AUTO_CLEARANCE_GROWTH = 1.5
+
+
 def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, *,
                   check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
+    """Beads, bonds and types of ``fabric`` (see :func:`render_loose`).
+
+    With ``fabric.auto_clearance`` the clearance between crossing yarns is raised
+    ×1.5 per try (at most :data:`AUTO_CLEARANCE_TRIES`) until the loose state has no
+    overlapping yarns; ``info["requested_clearance_m"]`` is the one used and
+    ``info["auto_clearance_tries"]`` the number of tries.
+    """
+    if not (fabric.auto_clearance and check):
+        return render_loose(fabric, discretisation, check=check, pad_fraction=pad_fraction)
+    trial = fabric
+    for k in range(AUTO_CLEARANCE_TRIES):
+        try:
+            model = render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
+        except InputError as exc:
+            if "overlap" not in str(exc) or k == AUTO_CLEARANCE_TRIES - 1:
+                raise InputError(f"{exc} (clearance \"auto\": tried up to "
+                                 f"{1e3 * trial.clearance_m:.3g} mm)") from None
+            trial = dataclasses.replace(trial, clearance_m=trial.clearance_m
+                                        * AUTO_CLEARANCE_GROWTH)
+            continue
+        model.info["auto_clearance_tries"] = k + 1
+        return model
+    raise AssertionError("unreachable")
+
+
+def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *,
+                 check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
     """Beads, bonds and types of ``fabric``.
 
     Args:
@@ -325,8 +358,26 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
                 model.yarns[model.yarn_ids[approach.j] - 1].name]
     bt_count = {f: sum(1 for bt in model.bond_type_table if bt.family == f)
                 for f in model.family_names}
+    straight = fabric.straight_areal_density_kg_m2()
+    built = mass / (size[0] * size[1])
+    datasheet = {
+        "areal_density_kg_m2": fabric.areal_density_kg_m2,
+        "areal_density_deviation": None if fabric.areal_density_kg_m2 is None
+        else built / fabric.areal_density_kg_m2 - 1.0,
+        "straight_areal_density_kg_m2": straight,
+        "thickness_m": fabric.thickness_m,
+        "thickness_pressure_pa": fabric.thickness_pressure_pa,
+    }
+    packing = {fam: {"yarn_fibre_volume_fraction": spec.yarn_fibre_volume_fraction,
+                     "filament_area_m2": spec.filament_area_m2,
+                     "section_area_m2": spec.section.area_m2, "shape": spec.shape,
+                     "width_m": spec.width_m, "height_m": spec.height_m,
+                     "woven_width_m": fabric.woven_width_m.get(fam, spec.width_m)}
+               for fam, spec in fabric.specs().items()}
     return {
         "format": INFO_FORMAT,
+        "datasheet": datasheet,
+        "yarn_packing": packing,
         "architecture": arch_info,
         "unit_cell_m": list(fabric.unit_cell_m),
         "tiling": list(fabric.tiling),
