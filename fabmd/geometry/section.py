@@ -27,8 +27,9 @@ ellipse gets flat, wide packings (e.g. rows of 4 + 3 for N = 7 at width/height
 Contact diameter d: the lattice is scaled to spacing d, with d the largest value
 for which every fibre lies inside the section — for an ellipse each fibre centre
 inside the ellipse of semi-axes (w/2 − d/2, h/2 − d/2); for the other shapes each
-fibre centre inside the shape and at least d/2 from its (finely sampled) outline. Neighbouring fibres then touch and
-the outer ones touch the yarn boundary: for a circle of diameter D this is
+fibre centre inside the shape and at least d/2 from its (finely sampled)
+outline. Neighbouring fibres then touch and the outer ones touch the yarn
+boundary: for a circle of diameter D this is
 d = D/3 for 7 fibres, D/5 for 19, D/7 for 37, D/9 for 61. The mechanical
 (filament) area of each fibre comes from the linear density, not from d (see
 :meth:`fabmd.model.material.VirtualFibre.from_yarn`).
