@@ -216,8 +216,12 @@ class Fabric:
         auto_clearance: choose the loose state for a dense fabric (scene files:
             ``clearance_m = "auto"``): 2D yarns wider than their spacing less the
             clearance are built narrower and taller (same area; the crimp stage
-            spreads them), and the build raises the clearance (×1.5 per try) until
-            no yarns overlap (the crimp stage compacts them).
+            spreads them), and the build lifts crossing yarns (and 3D levels) apart
+            (``lift_m``, growing per try) until no yarns overlap (the crimp stage
+            compacts them again).
+        lift_m: extra separation through the thickness between crossing yarns
+            (2D) or neighbouring levels (3D) of the loose state [m], on top of the
+            clearance.
     """
 
     architecture: Weave | Architecture3D
@@ -232,6 +236,7 @@ class Fabric:
     thickness_m: float | None = None
     thickness_pressure_pa: float | None = None
     auto_clearance: bool = False
+    lift_m: float = 0.0
     #: per family, the width given for the woven yarn where the loose one is narrower [m]
     woven_width_m: dict = field(default_factory=dict, compare=False)
 
@@ -279,6 +284,8 @@ class Fabric:
                 "fabric.clearance_m", quantity(self.clearance_m, "length",
                                                "fabric.clearance_m")))
         inputs.in_range("fabric.plateau", self.plateau, 0.0, 1.0, high_open=True)
+        object.__setattr__(self, "lift_m", inputs.non_negative(
+            "fabric.lift_m", quantity(self.lift_m, "length", "fabric.lift_m")))
         object.__setattr__(self, "woven_width_m", dict(self.woven_width_m))  # own copy
         self._datasheet()
         if self.auto_clearance and not self.is_3d:
@@ -409,7 +416,7 @@ class Fabric:
     # -- geometry ------------------------------------------------------------------------
     def levels(self) -> dict[str, list[float]]:
         """3D: z of every weft layer (``"weft"``) and gap (``"gap"``) [m]; 2D: crossing offsets."""
-        c = self.clearance_m
+        c = self.clearance_m + self.lift_m  # the lift dilates the loose state in z
         if not self.is_3d:
             half = 0.25 * (self.warp.height_m + self.weft.height_m) + 0.5 * c
             return {"crossing_half_separation": [half]}

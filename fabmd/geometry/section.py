@@ -53,8 +53,11 @@ SHAPES = ("ellipse", "lenticular", "racetrack")
 
 @functools.lru_cache(maxsize=64)
 def _hex_packing(n: int, aspect: float, shift: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
-    k = int(math.ceil(math.sqrt(n) * max(aspect, 1.0 / aspect, 1.0))) + 3
-    i, j = np.meshgrid(np.arange(-2 * k, 2 * k + 1), np.arange(-2 * k, 2 * k + 1))
+    # the n nearest sites lie well within these ranges (rows j, sites i along a row);
+    # a flat section needs long rows but few of them
+    kj = int(math.ceil(math.sqrt(n) * max(1.0 / aspect, 1.0))) + 3
+    ki = int(math.ceil(math.sqrt(n) * max(aspect, 1.0))) + 3 + kj
+    i, j = np.meshgrid(np.arange(-2 * ki, 2 * ki + 1), np.arange(-2 * kj, 2 * kj + 1))
     u = (i + 0.5 * j).ravel() - shift[0]
     v = (j * math.sqrt(3.0) / 2.0).ravel() - shift[1]
     dist = np.round(np.hypot(u / aspect, v), 9)
@@ -199,7 +202,7 @@ def _fit(unit: np.ndarray, a: float, b: float, shape: str = "ellipse") -> float:
     lo, hi = 0.0, 2.0 * min(a, b)
     if fits(hi):
         return hi
-    for _ in range(60):
+    for _ in range(60 if shape == "ellipse" else 32):  # the outline is sampled anyway
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if fits(mid) else (lo, mid)
     return lo

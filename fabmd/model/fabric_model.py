@@ -93,34 +93,55 @@ def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads]) -> None:
                 f"{path.family} height")
 
 
-#: tries of the loose-state search of ``Fabric.auto_clearance`` (clearance ×1.5 each)
+#: tries of the loose-state search of ``Fabric.auto_clearance`` (lift ×1.5 each)
 AUTO_CLEARANCE_TRIES = 12
 AUTO_CLEARANCE_GROWTH = 1.5
+#: halvings of the last step once a lift without overlap is found
+AUTO_CLEARANCE_BISECTIONS = 3
 
 
 def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, *,
                   check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
     """Beads, bonds and types of ``fabric`` (see :func:`render_loose`).
 
-    With ``fabric.auto_clearance`` the clearance between crossing yarns is raised
-    ×1.5 per try (at most :data:`AUTO_CLEARANCE_TRIES`) until the loose state has no
-    overlapping yarns; ``info["requested_clearance_m"]`` is the one used and
-    ``info["auto_clearance_tries"]`` the number of tries.
+    With ``fabric.auto_clearance`` the loose state is dilated through the thickness
+    until no yarns overlap: try ``lift_m`` = 0, then a quarter of the smallest yarn
+    height growing ×1.5 per try (at most :data:`AUTO_CLEARANCE_TRIES`), then
+    :data:`AUTO_CLEARANCE_BISECTIONS` halvings of the last step;
+    ``info["lift_m"]`` is the lift used and ``info["auto_clearance_tries"]`` the
+    number of tries.
     """
     if not (fabric.auto_clearance and check):
         return render_loose(fabric, discretisation, check=check, pad_fraction=pad_fraction)
+    step = 0.25 * min(s.height_m for s in fabric.specs().values())
     trial = fabric
     for k in range(AUTO_CLEARANCE_TRIES):
         try:
             model = render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
         except InputError as exc:
             if "overlap" not in str(exc) or k == AUTO_CLEARANCE_TRIES - 1:
-                raise InputError(f"{exc} (clearance \"auto\": tried up to "
-                                 f"{1e3 * trial.clearance_m:.3g} mm)") from None
-            trial = dataclasses.replace(trial, clearance_m=trial.clearance_m
-                                        * AUTO_CLEARANCE_GROWTH)
+                raise InputError(f"{exc} (clearance \"auto\": lifted up to "
+                                 f"{1e3 * trial.lift_m:.3g} mm)") from None
+            trial = dataclasses.replace(trial, lift_m=fabric.lift_m
+                                        + step * AUTO_CLEARANCE_GROWTH ** k)
             continue
-        model.info["auto_clearance_tries"] = k + 1
+        tries = k + 1
+        if k > 0:  # bisect between the last lift that overlapped and this one
+            low = 0.0 if k == 1 else step * AUTO_CLEARANCE_GROWTH ** (k - 2)
+            high = trial.lift_m - fabric.lift_m
+            for _ in range(AUTO_CLEARANCE_BISECTIONS):
+                mid = dataclasses.replace(fabric, lift_m=fabric.lift_m + 0.5 * (low + high))
+                tries += 1
+                try:
+                    found = render_loose(mid, discretisation, check=True,
+                                         pad_fraction=pad_fraction)
+                except InputError as exc:
+                    if "overlap" not in str(exc):
+                        raise
+                    low = 0.5 * (low + high)
+                    continue
+                high, model = 0.5 * (low + high), found
+        model.info["auto_clearance_tries"] = tries
         return model
     raise AssertionError("unreachable")
 
@@ -399,6 +420,7 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
         "clearance_m": None if approach is None else approach.gap_m,
         "clearance_pair": pair,
         "requested_clearance_m": fabric.clearance_m,
+        "lift_m": fabric.lift_m,
         "bond_types_per_family": bt_count,
         "discretisation": scene_dict(disc),
         "fabric": scene_dict(fabric),

@@ -33,7 +33,7 @@ from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..results.folder import read_print_file, write_csv, write_json
-from ..results.measure import fabric_measures
+from ..results.measure import areal_density_kg_m2, fabric_measures, passed_through
 from ..results.plots import plot_curves
 from ..results.preview import preview_png
 from ..results.trajectory import finalise, salvage
@@ -296,5 +296,9 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
         "overlap": overlap_summary(run_dir, crimp.contact),
+        # no yarn may pass through another on the way to the woven state
+        "pass_through": passed_through(loose, crimped),
+        "areal_density_kg_m2": areal_density_kg_m2(crimped),
+        "datasheet": loose.info.get("datasheet"),
     }
     return crimped, summary
