@@ -26,9 +26,11 @@ density). ``[fabric] architecture`` is one of:
 ``matrix``             ``matrix`` (rows = warp yarns, 1 = warp on top), ``allow_floats``
 ``orthogonal``         ``weft_layers``, ``float_columns``, ``dents``, ``columns``, ``warp_gaps``
 ``layer_to_layer``     ``weft_layers``, ``depth``, ``step``, ``dents``, ``columns``, ``warp_gaps``
-``through_thickness``  ``weft_layers``, ``step``, ``dents``, ``columns``, ``warp_gaps``
+``through_thickness``  ``weft_layers``, ``step``, ``dents``, ``columns`` (any),
+                       ``warp_gaps``, ``binders`` (per dent, side by side),
+                       ``binder_every`` (binders in every n-th dent)
 ``binder_paths``       ``weft_layers``, ``binder_paths`` (per dent, per binder, gap per
-                       column), ``warp_gaps``, ``allow_floats``
+                       column), ``warp_gaps``, ``allow_floats``, ``separate_binders``
 =====================  ===========================================================
 
 plus, for all: ``tiling = [nx, ny]``, ``periodic``, ``clearance_m`` (a length or
@@ -77,12 +79,12 @@ def _matrix(matrix=None, allow_floats: bool = False) -> Weave:
 
 
 def _binder_paths(weft_layers=None, binder_paths=None, warp_gaps=None,
-                  allow_floats: bool = False) -> Architecture3D:
+                  allow_floats: bool = False, separate_binders: bool = False) -> Architecture3D:
     if weft_layers is None or binder_paths is None:
         raise InputError("architecture 'binder_paths' needs weft_layers and binder_paths "
                          "(per dent, per binder, its gap at every weft column)")
     return Architecture3D(weft_layers, binder_paths, warp_gaps, name="3D (binder paths)",
-                          allow_floats=allow_floats)
+                          allow_floats=allow_floats, separate_binders=separate_binders)
 
 
 #: architecture -> (constructor, keys it takes)
@@ -97,9 +99,11 @@ ARCHITECTURES = {
     "layer_to_layer": (Architecture3D.layer_to_layer,
                        ("weft_layers", "depth", "step", "dents", "columns", "warp_gaps")),
     "through_thickness": (Architecture3D.through_thickness,
-                          ("weft_layers", "step", "dents", "columns", "warp_gaps")),
+                          ("weft_layers", "step", "dents", "columns", "warp_gaps", "binders",
+                           "binder_every")),
     "binder_paths": (_binder_paths,
-                     ("weft_layers", "binder_paths", "warp_gaps", "allow_floats")),
+                     ("weft_layers", "binder_paths", "warp_gaps", "allow_floats",
+                      "separate_binders")),
 }
 FABRIC_KEYS = ("architecture", "tiling", "periodic", "clearance_m", "plateau")
 #: datasheet keys of [fabric] (see the module docstring)

@@ -131,7 +131,7 @@ class YarnSpec:
         object.__setattr__(self, "width_m", section.width_m)
         object.__setattr__(self, "height_m", section.height_m)
         vf = self.yarn_fibre_volume_fraction
-        if vf > PACKING_LIMIT:
+        if vf > PACKING_LIMIT * (1 + 1e-9):
             raise InputError(
                 f"yarn{' ' + self.name if self.name else ''}: filament area "
                 f"{1e6 * self.filament_area_m2:.4g} mm² ({self.linear_density_tex:g} tex / "
@@ -214,11 +214,12 @@ class Fabric:
         thickness_m: datasheet thickness [m] (stored and reported; calibration uses it).
         thickness_pressure_pa: the pressure the thickness is quoted at [Pa].
         auto_clearance: choose the loose state for a dense fabric (scene files:
-            ``clearance_m = "auto"``): 2D yarns wider than their spacing less the
-            clearance are built narrower and taller (same area; the crimp stage
-            spreads them), and the build lifts crossing yarns (and 3D levels) apart
+            ``clearance_m = "auto"``): the build lifts crossing yarns (and 3D levels) apart
             (``lift_m``, growing per try) until no yarns overlap (the crimp stage
-            compacts them again).
+            compacts them again). With it, or for yarns sized from a
+            ``fibre_volume_fraction``, 2D yarns wider than their spacing less the
+            clearance are built narrower and taller (same section area; the crimp
+            stage spreads them); ``woven_width_m`` keeps the width given.
         lift_m: extra separation through the thickness between crossing yarns
             (2D) or neighbouring levels (3D) of the loose state [m], on top of the
             clearance.
@@ -255,11 +256,13 @@ class Fabric:
             if not isinstance(self.binder, YarnSpec):
                 raise InputError(f"fabric.binder (yarns.binder) is required: the 3D "
                                  f"architecture has {arch.n_binders} binder yarns")
+            pitch = self.binder_pitch_m()
             if self.binder.spacing_m is not None and not math.isclose(
-                    self.binder.spacing_m, self.warp.spacing_m, rel_tol=1e-9):
+                    self.binder.spacing_m, pitch, rel_tol=1e-9):
                 raise InputError(f"yarns.binder.spacing_m = {self.binder.spacing_m:g} m must "
-                                 f"equal the warp spacing {self.warp.spacing_m:g} m (one binder "
-                                 f"plane per dent) or be left out")
+                                 f"equal the binder plane pitch {pitch:g} m (the warp spacing "
+                                 f"{self.warp.spacing_m:g} m over the binder planes per dent "
+                                 f"+ 1 when separate) or be left out")
         elif self.binder is not None:
             raise InputError("fabric.binder (yarns.binder) is only used by 3D architectures")
         tiling = self.tiling
@@ -288,7 +291,7 @@ class Fabric:
             "fabric.lift_m", quantity(self.lift_m, "length", "fabric.lift_m")))
         object.__setattr__(self, "woven_width_m", dict(self.woven_width_m))  # own copy
         self._datasheet()
-        if self.auto_clearance and not self.is_3d:
+        if not self.is_3d:
             self._narrow_loose_yarns()
         self._check_fit()
 
@@ -321,6 +324,21 @@ class Fabric:
                 f"{why}: {terms}, total {1e3 * straight:.4g} g/m² (implied mean crimp "
                 f"{100 * crimp:+.1f} %); check tex, ends/picks per cm and areal density")
 
+    def with_loose_width(self, factor: float) -> Fabric:
+        """2D: the same fabric with warp and weft ``factor`` × as wide and as much taller
+        (same section area) in the loose state; ``woven_width_m`` keeps the given widths."""
+        if factor == 1.0 or self.is_3d:
+            return self
+        specs = {}
+        for fam in ("warp", "weft"):
+            spec = getattr(self, fam)
+            width = factor * spec.width_m
+            specs[fam] = dataclasses.replace(
+                spec, width_m=width, fibre_volume_fraction=None,
+                height_m=section_height(spec.section.area_m2, width, spec.shape))
+        woven = {f: self.woven_width_m.get(f, getattr(self, f).width_m) for f in specs}
+        return dataclasses.replace(self, woven_width_m=woven, **specs)
+
     def straight_areal_density_kg_m2(self) -> dict[str, float]:
         """Per family, the mass per fabric area of its yarns laid straight, Σ tex·count [kg/m²]."""
         lx, ly = self.unit_cell_m
@@ -336,7 +354,8 @@ class Fabric:
         for fam in ("warp", "weft"):
             spec = getattr(self, fam)
             room = spec.spacing_m - c
-            if spec.width_m <= room * (1 + 1e-12):
+            sized = spec.fibre_volume_fraction is not None or fam in self.woven_width_m
+            if spec.width_m <= room * (1 + 1e-12) or not (self.auto_clearance or sized):
                 continue
             if room <= 0:
                 raise InputError(f"yarns.{fam}: the clearance {c:g} m leaves no room in its "
@@ -378,6 +397,18 @@ class Fabric:
         lx, ly = self.unit_cell_m
         return lx * self.tiling[0], ly * self.tiling[1]
 
+    def max_binders_per_dent(self) -> int:
+        """3D: most binders in one dent (0 in 2D)."""
+        return max((len(d) for d in self.architecture.binder_paths), default=0) \
+            if self.is_3d else 0
+
+    def binder_pitch_m(self) -> float:
+        """3D: distance between neighbouring binder planes [m] (the warp spacing when a
+        dent's binders share a plane; over (binders per dent + 1) when separate)."""
+        if self.is_3d and self.architecture.separate_binders:
+            return self.warp.spacing_m / (self.max_binders_per_dent() + 1)
+        return self.warp.spacing_m
+
     def spacing(self, family: str) -> float:
         """Distance between neighbouring yarns of a family [m] (binder: the dent pitch)."""
         return self.warp.spacing_m if family == "binder" else getattr(self, family).spacing_m
@@ -398,7 +429,18 @@ class Fabric:
                              f"{c:g} m does not fit the weft spacing {weft.spacing_m:g} m: "
                              f"neighbouring weft yarns would overlap; reduce the width or "
                              f"increase the spacing")
-        if self.is_3d:
+        if self.is_3d and self.architecture.separate_binders:
+            room = self.binder_pitch_m()
+            need = max(0.5 * (self.warp.width_m + self.binder.width_m),
+                       self.binder.width_m) + c
+            if need > room * (1 + 1e-12):
+                raise InputError(
+                    f"binder planes lie {room:g} m apart (warp spacing {self.warp.spacing_m:g} "
+                    f"m over {self.max_binders_per_dent() + 1}): stuffers "
+                    f"({self.warp.width_m:g} m wide) and binders ({self.binder.width_m:g} m "
+                    f"wide) need {need:g} m with the clearance: increase yarns.warp.spacing_m "
+                    f"or reduce the widths")
+        elif self.is_3d:
             room = 0.5 * self.warp.spacing_m
             need = 0.5 * (self.warp.width_m + self.binder.width_m) + c
             if need > room * (1 + 1e-12):
@@ -474,8 +516,10 @@ class Fabric:
                                         z_m=lev["weft"][k], level=k))
             for d, dent in enumerate(a.binder_paths):
                 for b, path in enumerate(dent):
+                    y = (d + 0.75) * p if not a.separate_binders else \
+                        (d + 0.25 + (b + 1) * self.binder_pitch_m() / p) * p
                     out.append(YarnPath(f"binder-d{d + 1}-{b + 1}", "binder", 0,
-                                        (d + 0.75) * p, lx, lx, tuple(cols),
+                                        y, lx, lx, tuple(cols),
                                         tuple(lev["gap"][g] for g in path),
                                         (f * 0.5 * self.weft.width_m,), level=min(path)))
         return [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,

@@ -175,7 +175,7 @@ _OUTLINE_POINTS = 200
 def _outline(section: Section) -> np.ndarray:
     u = 0.5 * section.width_m * np.cos(np.linspace(0.0, math.pi, _OUTLINE_POINTS))
     t = section.half_thickness_m(u)
-    return np.vstack([np.column_stack([u, t]), np.column_stack([u, -t])])
+    return np.vstack([np.column_stack([u, t]), np.column_stack([u, -t])[::-1]])  # closed loop
 
 
 def _fit(unit: np.ndarray, a: float, b: float, shape: str = "ellipse") -> float:
@@ -191,13 +191,18 @@ def _fit(unit: np.ndarray, a: float, b: float, shape: str = "ellipse") -> float:
     else:
         sec = Section(2 * a, 2 * b, shape)
         outline = _outline(sec)
+        start, edge = outline, np.roll(outline, -1, axis=0) - outline
+        length2 = np.maximum(np.einsum("mk,mk->m", edge, edge), 1e-300)
 
         def fits(d: float) -> bool:
             c = d * unit
             if np.any(np.abs(c[:, 1]) >= sec.half_thickness_m(c[:, 0])):
                 return False
-            dist = np.linalg.norm(c[:, None, :] - outline[None, :, :], axis=2).min(axis=1)
-            return bool(np.all(dist >= 0.5 * d * (1 - 1e-9)))
+            # distance to the outline's segments (not just its vertices)
+            rel = c[:, None, :] - start[None]
+            t = np.clip(np.einsum("nmk,mk->nm", rel, edge) / length2, 0.0, 1.0)
+            dist = np.linalg.norm(rel - t[..., None] * edge[None], axis=2).min(axis=1)
+            return bool(np.all(dist >= 0.5 * d))
 
     lo, hi = 0.0, 2.0 * min(a, b)
     if fits(hi):

@@ -93,57 +93,63 @@ def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads]) -> None:
                 f"{path.family} height")
 
 
-#: tries of the loose-state search of ``Fabric.auto_clearance`` (lift ×1.5 each)
-AUTO_CLEARANCE_TRIES = 12
-AUTO_CLEARANCE_GROWTH = 1.5
-#: halvings of the last step once a lift without overlap is found
-AUTO_CLEARANCE_BISECTIONS = 3
+#: loose-state search of ``Fabric.auto_clearance``: 2D loose widths tried (fractions of
+#: the width given; the section area is kept), and per width the lifts tried: 0, then a
+#: quarter of the smallest yarn height growing ×1.5, then bisection of the last step
+LOOSE_WIDTH_FACTORS = (1.0, 0.85, 0.7, 0.55)
+LIFT_TRIES = 7
+LIFT_GROWTH = 1.5
+LIFT_BISECTIONS = 3
 
 
 def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, *,
                   check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
     """Beads, bonds and types of ``fabric`` (see :func:`render_loose`).
 
-    With ``fabric.auto_clearance`` the loose state is dilated through the thickness
-    until no yarns overlap: try ``lift_m`` = 0, then a quarter of the smallest yarn
-    height growing ×1.5 per try (at most :data:`AUTO_CLEARANCE_TRIES`), then
-    :data:`AUTO_CLEARANCE_BISECTIONS` halvings of the last step;
-    ``info["lift_m"]`` is the lift used and ``info["auto_clearance_tries"]`` the
-    number of tries.
+    With ``fabric.auto_clearance`` the loose state of a dense fabric is searched
+    for: at each loose width of :data:`LOOSE_WIDTH_FACTORS` (2D; the narrower
+    yarns are taller, same area, and spread again during the crimp) the crossing
+    yarns are lifted apart (``lift_m``, :data:`LIFT_TRIES` growing tries, then
+    :data:`LIFT_BISECTIONS` halvings) until no yarns overlap. ``info`` records
+    ``lift_m``, ``loose_width_factor`` and ``auto_clearance_tries``.
     """
     if not (fabric.auto_clearance and check):
         return render_loose(fabric, discretisation, check=check, pad_fraction=pad_fraction)
-    step = 0.25 * min(s.height_m for s in fabric.specs().values())
-    trial = fabric
-    for k in range(AUTO_CLEARANCE_TRIES):
+
+    def attempt(trial: Fabric) -> BeadModel | None:
         try:
-            model = render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
+            return render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
         except InputError as exc:
-            if "overlap" not in str(exc) or k == AUTO_CLEARANCE_TRIES - 1:
-                raise InputError(f"{exc} (clearance \"auto\": lifted up to "
-                                 f"{1e3 * trial.lift_m:.3g} mm)") from None
-            trial = dataclasses.replace(trial, lift_m=fabric.lift_m
-                                        + step * AUTO_CLEARANCE_GROWTH ** k)
-            continue
-        tries = k + 1
-        if k > 0:  # bisect between the last lift that overlapped and this one
-            low = 0.0 if k == 1 else step * AUTO_CLEARANCE_GROWTH ** (k - 2)
-            high = trial.lift_m - fabric.lift_m
-            for _ in range(AUTO_CLEARANCE_BISECTIONS):
-                mid = dataclasses.replace(fabric, lift_m=fabric.lift_m + 0.5 * (low + high))
+            if "overlap" not in str(exc):
+                raise
+            attempt.last = str(exc)
+            return None
+
+    tries = 0
+    factors = (1.0,) if fabric.is_3d else LOOSE_WIDTH_FACTORS
+    for factor in factors:
+        base = fabric.with_loose_width(factor)
+        step = 0.25 * min(s.height_m for s in base.specs().values())
+        lifts = [0.0] + [step * LIFT_GROWTH ** k for k in range(LIFT_TRIES - 1)]
+        for k, lift in enumerate(lifts):
+            tries += 1
+            model = attempt(dataclasses.replace(base, lift_m=fabric.lift_m + lift))
+            if model is None:
+                continue
+            low, high = (lifts[k - 1], lift) if k else (0.0, 0.0)
+            for _ in range(LIFT_BISECTIONS if k else 0):
                 tries += 1
-                try:
-                    found = render_loose(mid, discretisation, check=True,
-                                         pad_fraction=pad_fraction)
-                except InputError as exc:
-                    if "overlap" not in str(exc):
-                        raise
-                    low = 0.5 * (low + high)
-                    continue
-                high, model = 0.5 * (low + high), found
-        model.info["auto_clearance_tries"] = tries
-        return model
-    raise AssertionError("unreachable")
+                mid = 0.5 * (low + high)
+                found = attempt(dataclasses.replace(base, lift_m=fabric.lift_m + mid))
+                if found is None:
+                    low = mid
+                else:
+                    high, model = mid, found
+            model.info.update(auto_clearance_tries=tries, loose_width_factor=factor)
+            return model
+    raise InputError(f"{attempt.last} (clearance \"auto\": no loose state found with loose "
+                     f"widths down to {factors[-1]:g} of the given ones and lifts up to "
+                     f"{1e3 * lifts[-1]:.3g} mm)")
 
 
 def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *,
@@ -345,7 +351,8 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
         arch_info = {"kind": "3d", "name": arch.name, "weft_layers": arch.weft_layers,
                      "columns": arch.columns, "dents": arch.dents,
                      "warp_gaps": list(arch.warp_gaps),
-                     "binder_paths": [[list(p) for p in dent] for dent in arch.binder_paths]}
+                     "binder_paths": [[list(p) for p in dent] for dent in arch.binder_paths],
+                     "separate_binders": arch.separate_binders}
     else:
         arch_info = {"kind": "2d", "name": arch.name, "matrix": [list(r) for r in arch.matrix]}
     size = fabric.size_m
