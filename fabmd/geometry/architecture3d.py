@@ -156,7 +156,7 @@ class Architecture3D:
         binding = [k for k in range(dents) if k % every == 0]
         total = len(binding) * binders
         paths = [[] for _ in range(dents)]
-        for q, (k, b) in enumerate((k, b) for k in binding for b in range(binders)):
+        for q, k in enumerate(k for k in binding for _ in range(binders)):
             shift = (k * period) // dents if binders == 1 and every == 1 \
                 else (q * period) // total
             paths[k].append(_shift(wave, shift))
