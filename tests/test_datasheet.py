@@ -217,3 +217,17 @@ def test_binders_every_second_dent_and_old_layouts_unchanged():
     assert old.columns == 8 and not old.separate_binders
     assert list(old.binder_paths[0][0]) == [0, 1, 2, 3, 4, 3, 2, 1]
     assert list(old.binder_paths[1][0]) == [4, 3, 2, 1, 0, 1, 2, 3]  # half a period on
+
+
+# -- crimp that ends where a woven fabric is ----------------------------------------------
+def test_shrink_beyond_the_loose_crimp_is_flagged():
+    yarn = YarnSpec("600 tex", GLASS, width_m="1.6 mm", height_m="0.8 mm", spacing_m="2.5 mm",
+                    n_fibres=1)
+    model = render_fabric(Fabric(Weave.plain(), yarn, yarn, periodic=True))
+    loose = model.info["crimp"]["warp"]
+    assert loose > 0
+    over = Crimp(expansion={"warp": -1.1 * loose, "weft": -0.9 * loose})
+    messages = over.shrink_warnings(model)
+    assert len(messages) == 1 and "crimp.expansion.warp" in messages[0]
+    assert f"{100 * loose:.3g} %" in messages[0]
+    assert Crimp(expansion={"warp": -0.9 * loose}).shrink_warnings(model) == []
