@@ -231,3 +231,13 @@ def test_shrink_beyond_the_loose_crimp_is_flagged():
     assert len(messages) == 1 and "crimp.expansion.warp" in messages[0]
     assert f"{100 * loose:.3g} %" in messages[0]
     assert Crimp(expansion={"warp": -0.9 * loose}).shrink_warnings(model) == []
+
+
+def test_fabmd_build_prints_areal_density_thickness_and_packing(tmp_path):
+    from .conftest import run_cli
+
+    out = run_cli("build", str(EXAMPLES / "carbon_plain_3k.toml"), "--out",
+                  str(tmp_path / "b"), check=True).stdout
+    assert "areal density" in out and "(datasheet 200 g/m²" in out
+    assert "datasheet 0.25 mm at 4.14 kPa" in out
+    assert "yarn packing: warp Vf 0.60" in out and "weft Vf 0.60" in out
