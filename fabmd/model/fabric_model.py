@@ -174,7 +174,11 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
     extent incl. radius), ``crimp`` per family (loose centreline crimp),
     ``areal_density_kg_m2``, ``clearance_m`` (smallest gap between beads of
     different yarns; ``None`` if above the search cutoff), ``clearance_pair``
-    (the two yarns), ``requested_clearance_m``, ``bond_types_per_family``,
+    (the two yarns), ``requested_clearance_m``, ``lift_m`` (loose-state lift),
+    ``datasheet`` (areal density given, built/given − 1, straight-yarn areal density
+    per family, thickness and its pressure), ``yarn_packing`` (per family: yarn fibre
+    volume fraction, filament and section area, shape, width, height, woven width),
+    ``bond_types_per_family``,
     ``build_s`` and ``fabric`` (the description as plain data).
     """
     t0 = time.perf_counter()
