@@ -100,6 +100,9 @@ LOOSE_WIDTH_FACTORS = (1.0, 0.85, 0.7, 0.55)
 LIFT_TRIES = 7
 LIFT_GROWTH = 1.5
 LIFT_BISECTIONS = 3
+#: a loose state is accepted when the smallest gap between yarns is at least this
+#: fraction of the clearance
+AUTO_GAP_FRACTION = 0.5
 
 
 def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, *,
@@ -110,7 +113,8 @@ def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, 
     for: at each loose width of :data:`LOOSE_WIDTH_FACTORS` (2D; the narrower
     yarns are taller, same area, and spread again during the crimp) the crossing
     yarns are lifted apart (``lift_m``, :data:`LIFT_TRIES` growing tries, then
-    :data:`LIFT_BISECTIONS` halvings) until no yarns overlap. ``info`` records
+    :data:`LIFT_BISECTIONS` halvings) until no yarns overlap and the smallest gap
+    between yarns is :data:`AUTO_GAP_FRACTION` of the clearance. ``info`` records
     ``lift_m``, ``loose_width_factor`` and ``auto_clearance_tries``.
     """
     if not (fabric.auto_clearance and check):
@@ -118,12 +122,20 @@ def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, 
 
     def attempt(trial: Fabric) -> BeadModel | None:
         try:
-            return render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
+            model = render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
         except InputError as exc:
             if "overlap" not in str(exc):
                 raise
             attempt.last = str(exc)
             return None
+        gap = model.info["clearance_m"]
+        if gap is not None and gap < AUTO_GAP_FRACTION * trial.clearance_m:
+            pair = " and ".join(model.info["clearance_pair"] or ())
+            attempt.last = (f"yarns {pair} come within {1e3 * gap:.3g} mm, less than "
+                            f"{AUTO_GAP_FRACTION:g} x the clearance "
+                            f"{1e3 * trial.clearance_m:.3g} mm")
+            return None
+        return model
 
     tries = 0
     factors = (1.0,) if fabric.is_3d else LOOSE_WIDTH_FACTORS
