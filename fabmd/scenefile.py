@@ -24,8 +24,10 @@ density). ``[fabric] architecture`` is one of:
 ``satin``              ``n`` (5), ``move`` (smallest allowed)
 ``basket``             ``n``, ``m`` (2, n)
 ``matrix``             ``matrix`` (rows = warp yarns, 1 = warp on top), ``allow_floats``
-``orthogonal``         ``weft_layers``, ``float_columns``, ``dents``, ``columns``, ``warp_gaps``
-``layer_to_layer``     ``weft_layers``, ``depth``, ``step``, ``dents``, ``columns``, ``warp_gaps``
+``orthogonal``         ``weft_layers``, ``float_columns``, ``dents``, ``columns``, ``warp_gaps``,
+                       ``binder_every``
+``layer_to_layer``     ``weft_layers``, ``depth``, ``step``, ``dents``, ``columns`` (any),
+                       ``warp_gaps``, ``binder_every``
 ``through_thickness``  ``weft_layers``, ``step``, ``dents``, ``columns`` (any),
                        ``warp_gaps``, ``binders`` (per dent, side by side),
                        ``binder_every`` (binders in every n-th dent)
@@ -95,9 +97,11 @@ ARCHITECTURES = {
     "basket": (Weave.basket, ("n", "m")),
     "matrix": (_matrix, ("matrix", "allow_floats")),
     "orthogonal": (Architecture3D.orthogonal,
-                   ("weft_layers", "float_columns", "dents", "columns", "warp_gaps")),
+                   ("weft_layers", "float_columns", "dents", "columns", "warp_gaps",
+                    "binder_every")),
     "layer_to_layer": (Architecture3D.layer_to_layer,
-                       ("weft_layers", "depth", "step", "dents", "columns", "warp_gaps")),
+                       ("weft_layers", "depth", "step", "dents", "columns", "warp_gaps",
+                        "binder_every")),
     "through_thickness": (Architecture3D.through_thickness,
                           ("weft_layers", "step", "dents", "columns", "warp_gaps", "binders",
                            "binder_every")),

@@ -215,6 +215,14 @@ def test_through_thickness_cell_with_40_weft_and_8_binders_renders_the_binder_pa
 def test_binders_every_second_dent_and_old_layouts_unchanged():
     arch = Architecture3D.through_thickness(weft_layers=4, dents=4, binder_every=2)
     assert [len(d) for d in arch.binder_paths] == [1, 0, 1, 0]
+    ortho = Architecture3D.orthogonal(weft_layers=3, dents=4, binder_every=2)
+    assert [len(d) for d in ortho.binder_paths] == [1, 0, 1, 0]
+    # a layer-to-layer cell of any width: binder b between gaps b and b + 2, in order
+    l2l = Architecture3D.layer_to_layer(weft_layers=5, depth=1, columns=6, dents=2)
+    assert l2l.columns == 6 and l2l.n_binders == 8
+    for dent in l2l.binder_paths:
+        for b, path in enumerate(dent):
+            assert min(path) == b and max(path) == b + 2
     old = Architecture3D.through_thickness(weft_layers=4, dents=2)
     assert old.columns == 8 and not old.separate_binders
     assert list(old.binder_paths[0][0]) == [0, 1, 2, 3, 4, 3, 2, 1]

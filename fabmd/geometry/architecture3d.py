@@ -24,7 +24,8 @@ Named architectures (see the constructors):
 * :meth:`Architecture3D.orthogonal` — binders go straight through the whole
   thickness between weft columns, over ``float_columns`` columns on each face;
 * :meth:`Architecture3D.layer_to_layer` — angle interlock in which each binder
-  links ``depth`` + 1 neighbouring weft layers (one binder per starting layer);
+  links ``depth`` + 1 neighbouring weft layers (one binder per starting layer),
+  any number of columns;
 * :meth:`Architecture3D.through_thickness` — angle interlock in which binders
   cross the whole thickness diagonally, one gap per ``step`` columns; any number
   of columns (a cell that is not a whole number of binder periods spreads one
@@ -91,22 +92,30 @@ class Architecture3D:
     # -- constructors ------------------------------------------------------------------
     @classmethod
     def orthogonal(cls, weft_layers: int = 3, float_columns: int = 1, dents: int = 2,
-                   columns: int | None = None, warp_gaps=None) -> Architecture3D:
-        """Binders over ``float_columns`` weft columns on top, then the same below."""
+                   columns: int | None = None, warp_gaps=None,
+                   binder_every: int = 1) -> Architecture3D:
+        """Binders over ``float_columns`` weft columns on top, then the same below
+        (in every ``binder_every``-th dent only)."""
         n_layers = inputs.positive_int("architecture.weft_layers", weft_layers)
         f = inputs.positive_int("architecture.float_columns", float_columns)
         dents = inputs.positive_int("architecture.dents", dents)
         period = 2 * f
         columns = _columns(columns, period)
         base = [0 if (c % period) < f else n_layers for c in range(columns)]
-        paths = [[_shift(base, (k % 2) * f)] for k in range(dents)]
+        every = inputs.positive_int("architecture.binder_every", binder_every)
+        paths = [[_shift(base, (k % 2) * f)] if k % every == 0 else [] for k in range(dents)]
         return cls(n_layers, paths, warp_gaps, name=f"orthogonal (float {f})")
 
     @classmethod
     def layer_to_layer(cls, weft_layers: int = 4, depth: int = 1, step: int = 1,
                        dents: int = 2, columns: int | None = None,
-                       warp_gaps=None) -> Architecture3D:
-        """Angle interlock: binder *b* runs between gaps b and b + depth + 1."""
+                       warp_gaps=None, binder_every: int = 1) -> Architecture3D:
+        """Angle interlock: binder *b* runs between gaps b and b + depth + 1.
+
+        ``columns`` that are not a multiple of the period 2·(depth + 1)·step spread one
+        period over the cell (each column's gap rounded); ``binder_every``: binders in
+        every n-th dent only.
+        """
         n_layers = inputs.positive_int("architecture.weft_layers", weft_layers)
         depth = inputs.positive_int("architecture.depth", depth)
         if depth >= n_layers:
@@ -115,10 +124,17 @@ class Architecture3D:
         step = inputs.positive_int("architecture.step", step)
         dents = inputs.positive_int("architecture.dents", dents)
         period = 2 * (depth + 1) * step
-        columns = _columns(columns, period)
-        wave = _triangle(depth + 1, step, columns)
+        if columns is None or (isinstance(columns, int) and columns % period == 0):
+            columns = _columns(columns, period)
+            wave = _triangle(depth + 1, step, columns)
+        else:
+            columns = inputs.positive_int("architecture.columns", columns, minimum=2)
+            period = columns
+            wave = _spread_triangle(depth + 1, columns)
+        every = inputs.positive_int("architecture.binder_every", binder_every)
         paths = [[_shift([b + w for w in wave], (k * period) // dents)
-                  for b in range(n_layers - depth)] for k in range(dents)]
+                  for b in range(n_layers - depth)] if k % every == 0 else []
+                 for k in range(dents)]
         return cls(n_layers, paths, warp_gaps, name=f"layer-to-layer angle interlock "
                                                     f"(depth {depth}, step {step})")
 
