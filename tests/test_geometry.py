@@ -95,8 +95,9 @@ def test_impossible_binder_paths_are_one_line_errors(paths, words):
 
 
 def test_columns_must_fit_the_binder_period():
+    # orthogonal floats keep whole periods (angle interlocks spread one over any cell)
     with pytest.raises(InputError, match="multiple of the binder period 4"):
-        Architecture3D.layer_to_layer(weft_layers=3, columns=6)
+        Architecture3D.orthogonal(weft_layers=3, float_columns=2, columns=6)
 
 
 # -- sections ----------------------------------------------------------------------------
