@@ -251,3 +251,17 @@ def test_fabmd_build_prints_areal_density_thickness_and_packing(tmp_path):
     assert "areal density" in out and "(datasheet 200 g/m²" in out
     assert "datasheet 0.25 mm at 4.14 kPa" in out
     assert "yarn packing: warp Vf 0.60" in out and "weft Vf 0.60" in out
+
+
+@pytest.mark.parametrize("shape", ["lenticular", "racetrack"])
+def test_lenticular_and_racetrack_yarns_build_a_weave(shape):
+    yarn = YarnSpec("600 tex", GLASS, width_m="1.8 mm", spacing_m="2.5 mm", shape=shape,
+                    fibre_volume_fraction=0.6, n_fibres=5)
+    model = render_fabric(Fabric(Weave.plain(), yarn, yarn, periodic=True))  # no overlap
+    pack = model.info["yarn_packing"]["warp"]
+    assert pack["shape"] == shape
+    assert pack["filament_area_m2"] / pack["section_area_m2"] == pytest.approx(0.6)
+    # the fibres stay inside the section: their offsets span at most its height and width
+    offsets, d = yarn.packing()
+    assert 2 * np.abs(offsets[:, 1]).max() + d <= yarn.height_m * (1 + 1e-9)
+    assert 2 * np.abs(offsets[:, 0]).max() + d <= yarn.width_m * (1 + 1e-9)
