@@ -313,7 +313,7 @@ class Fabric:
         crimp = target / straight - 1.0
         terms = " + ".join(
             f"{fam} {self.specs()[fam].linear_density_tex:g} tex x "
-            f"{1e-3 * parts[fam] / (self.specs()[fam].linear_density_kg_m):.4g} m/m² "
+            f"{parts[fam] / self.specs()[fam].linear_density_kg_m:.4g} m/m² "
             f"= {1e3 * parts[fam]:.4g} g/m²" for fam in parts)
         if crimp < -AREAL_DENSITY_TOLERANCE or crimp > MAX_DATASHEET_CRIMP:
             why = ("lighter than its straight yarns" if crimp < 0 else
