@@ -5,7 +5,8 @@ Sections fabmd owns (unknown keys in them are refused, naming the key)::
     title = "..."                      # optional
     [fabric]         architecture and its pattern, tiling, periodic, clearance_m, plateau
     [yarns.warp]     YarnSpec fields: material, linear_density_tex, width_m, height_m,
-    [yarns.weft]       n_fibres, spacing_m or count_per_m, name
+    [yarns.weft]       n_fibres, spacing_m or count_per_m, name, shape,
+                       fibre_volume_fraction, filament_diameter_m, filament_count
     [yarns.binder]   (3D architectures only)
     [materials.NAME] FibreMaterial fields: modulus_pa, density_kg_m3
     [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor
@@ -23,14 +24,29 @@ density). ``[fabric] architecture`` is one of:
 ``satin``              ``n`` (5), ``move`` (smallest allowed)
 ``basket``             ``n``, ``m`` (2, n)
 ``matrix``             ``matrix`` (rows = warp yarns, 1 = warp on top), ``allow_floats``
-``orthogonal``         ``weft_layers``, ``float_columns``, ``dents``, ``columns``, ``warp_gaps``
-``layer_to_layer``     ``weft_layers``, ``depth``, ``step``, ``dents``, ``columns``, ``warp_gaps``
-``through_thickness``  ``weft_layers``, ``step``, ``dents``, ``columns``, ``warp_gaps``
+``orthogonal``         ``weft_layers``, ``float_columns``, ``dents``, ``columns``, ``warp_gaps``,
+                       ``binder_every``
+``layer_to_layer``     ``weft_layers``, ``depth``, ``step``, ``dents``, ``columns`` (any),
+                       ``warp_gaps``, ``binder_every``
+``through_thickness``  ``weft_layers``, ``step``, ``dents``, ``columns`` (any),
+                       ``warp_gaps``, ``binders`` (per dent, side by side),
+                       ``binder_every`` (binders in every n-th dent)
 ``binder_paths``       ``weft_layers``, ``binder_paths`` (per dent, per binder, gap per
-                       column), ``warp_gaps``, ``allow_floats``
+                       column), ``warp_gaps``, ``allow_floats``, ``separate_binders``
 =====================  ===========================================================
 
-plus, for all: ``tiling = [nx, ny]``, ``periodic``, ``clearance_m``, ``plateau``.
+plus, for all: ``tiling = [nx, ny]``, ``periodic``, ``clearance_m`` (a length or
+``"auto"``: fabmd picks the loose state of a dense fabric), ``plateau``.
+
+A fabric can be described from its **datasheet**: ``[fabric]`` may give
+``areal_density_kg_m2`` ("200 g/m2"), ``thickness = "0.25 mm at 4.14 kPa"`` (or
+``thickness_m`` and ``thickness_pressure_pa``), ``ends_per_m`` and ``picks_per_m``
+("5 ends/cm": the warp and weft counts, instead of the yarns' ``count_per_m``); a
+yarn gives its tex, its material's fibre density, optionally ``filament_diameter_m``
+and ``filament_count`` ("3K"), ``width_m`` (default: its spacing), ``shape`` and the
+``fibre_volume_fraction`` its section is sized for (its height then follows). The
+datasheet is checked (filament area, areal density against Σ tex·count) and the build
+reports its areal density against it.
 The same objects can be built in Python (:class:`~fabmd.geometry.fabric.Fabric`,
 :class:`Scene`).
 """
@@ -65,12 +81,12 @@ def _matrix(matrix=None, allow_floats: bool = False) -> Weave:
 
 
 def _binder_paths(weft_layers=None, binder_paths=None, warp_gaps=None,
-                  allow_floats: bool = False) -> Architecture3D:
+                  allow_floats: bool = False, separate_binders: bool = False) -> Architecture3D:
     if weft_layers is None or binder_paths is None:
         raise InputError("architecture 'binder_paths' needs weft_layers and binder_paths "
                          "(per dent, per binder, its gap at every weft column)")
     return Architecture3D(weft_layers, binder_paths, warp_gaps, name="3D (binder paths)",
-                          allow_floats=allow_floats)
+                          allow_floats=allow_floats, separate_binders=separate_binders)
 
 
 #: architecture -> (constructor, keys it takes)
@@ -81,15 +97,22 @@ ARCHITECTURES = {
     "basket": (Weave.basket, ("n", "m")),
     "matrix": (_matrix, ("matrix", "allow_floats")),
     "orthogonal": (Architecture3D.orthogonal,
-                   ("weft_layers", "float_columns", "dents", "columns", "warp_gaps")),
+                   ("weft_layers", "float_columns", "dents", "columns", "warp_gaps",
+                    "binder_every")),
     "layer_to_layer": (Architecture3D.layer_to_layer,
-                       ("weft_layers", "depth", "step", "dents", "columns", "warp_gaps")),
+                       ("weft_layers", "depth", "step", "dents", "columns", "warp_gaps",
+                        "binder_every")),
     "through_thickness": (Architecture3D.through_thickness,
-                          ("weft_layers", "step", "dents", "columns", "warp_gaps")),
+                          ("weft_layers", "step", "dents", "columns", "warp_gaps", "binders",
+                           "binder_every")),
     "binder_paths": (_binder_paths,
-                     ("weft_layers", "binder_paths", "warp_gaps", "allow_floats")),
+                     ("weft_layers", "binder_paths", "warp_gaps", "allow_floats",
+                      "separate_binders")),
 }
 FABRIC_KEYS = ("architecture", "tiling", "periodic", "clearance_m", "plateau")
+#: datasheet keys of [fabric] (see the module docstring)
+DATASHEET_KEYS = ("areal_density_kg_m2", "thickness", "thickness_m", "thickness_pressure_pa",
+                  "ends_per_m", "picks_per_m")
 OWNED = ("fabric", "yarns", "materials", "discretisation", "contact")
 TOP_LEVEL_KEYS = ("title", "description")
 YARN_FAMILIES = ("warp", "weft", "binder")
@@ -176,6 +199,23 @@ def _build(where: str, section: str, factory, **kwargs):
         raise InputError(f"{where}: [{section}] {exc}") from None
 
 
+def _thickness(value, where: str) -> tuple[float, float | None]:
+    """``"1.2 mm at 4.14 kPa"`` -> (thickness [m], pressure [Pa]); a bare length has no pressure."""
+    from .units import quantity
+
+    if not isinstance(value, str):
+        return quantity(value, "length", "fabric.thickness"), None
+    text, _, pressure = value.partition(" at ")
+    try:
+        t = quantity(text.strip(), "length", "fabric.thickness")
+        p = quantity(pressure.strip(), "pressure", "fabric.thickness pressure") \
+            if pressure else None
+    except InputError as exc:
+        raise InputError(f"{where}: [fabric] thickness must read like \"1.2 mm at 4.14 kPa\": "
+                         f"{exc}") from None
+    return t, p
+
+
 def _fields(cls) -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(cls))
 
@@ -201,7 +241,18 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
         _check_keys(table, ("modulus_pa", "density_kg_m3"), where, f"materials.{name}")
         materials[name] = _build(where, f"materials.{name}", FibreMaterial, name=name, **table)
 
-    yarn_tables = _section(data, "yarns", where)
+    yarn_tables = dict(_section(data, "yarns", where))
+    fab = dict(_section(data, "fabric", where))
+    for key, fam in (("ends_per_m", "warp"), ("picks_per_m", "weft")):
+        if key not in fab:
+            continue
+        table = yarn_tables.get(fam)
+        if not isinstance(table, dict):
+            raise InputError(f"{where}: [fabric] {key} is given but [yarns.{fam}] is missing")
+        if "count_per_m" in table or "spacing_m" in table:
+            raise InputError(f"{where}: [fabric] {key} and [yarns.{fam}] count_per_m/spacing_m "
+                             f"both set the {fam} count; give one")
+        yarn_tables[fam] = dict(table, count_per_m=fab.pop(key))
     specs = {}
     for fam, table in yarn_tables.items():
         if fam not in YARN_FAMILIES:
@@ -219,21 +270,25 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
             raise InputError(f"{where}: [yarns.{fam}] material {mat!r} is not defined (known: "
                              f"{', '.join(materials)}; add a [materials.{mat}] table)")
         kwargs["material"] = materials[mat]
-        for required in ("linear_density_tex", "width_m"):
+        for required in ("linear_density_tex",):
             if required not in kwargs:
                 raise InputError(f"{where}: [yarns.{fam}] needs {required}")
         specs[fam] = _build(where, f"yarns.{fam}", YarnSpec, **kwargs)
     for fam in ("warp", "weft"):
         if fam not in specs:
             raise InputError(f"{where}: [yarns.{fam}] is missing")
-
-    fab = dict(_section(data, "fabric", where))
+    if "thickness" in fab:  # "1.2 mm at 4.14 kPa"
+        if "thickness_m" in fab or "thickness_pressure_pa" in fab:
+            raise InputError(f"{where}: [fabric] give thickness = \"<t> at <p>\" or "
+                             f"thickness_m (+ thickness_pressure_pa), not both")
+        fab["thickness_m"], fab["thickness_pressure_pa"] = _thickness(fab.pop("thickness"),
+                                                                      where)
     kind = fab.pop("architecture", None)
     if kind not in ARCHITECTURES:
         raise InputError(f"{where}: [fabric] architecture must be one of "
                          f"{', '.join(ARCHITECTURES)}, got {kind!r}")
     factory, arch_keys = ARCHITECTURES[kind]
-    _check_keys(fab, tuple(FABRIC_KEYS[1:]) + arch_keys, where, "fabric")
+    _check_keys(fab, tuple(FABRIC_KEYS[1:]) + DATASHEET_KEYS + arch_keys, where, "fabric")
     arch = _build(where, "fabric", factory, **{k: fab.pop(k) for k in arch_keys if k in fab})
     if isinstance(arch, Architecture3D) and "binder" not in specs:
         raise InputError(f"{where}: [yarns.binder] is required: the 3D architecture has "

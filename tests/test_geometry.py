@@ -95,8 +95,9 @@ def test_impossible_binder_paths_are_one_line_errors(paths, words):
 
 
 def test_columns_must_fit_the_binder_period():
+    # orthogonal floats keep whole periods (angle interlocks spread one over any cell)
     with pytest.raises(InputError, match="multiple of the binder period 4"):
-        Architecture3D.layer_to_layer(weft_layers=3, columns=6)
+        Architecture3D.orthogonal(weft_layers=3, float_columns=2, columns=6)
 
 
 # -- sections ----------------------------------------------------------------------------
@@ -146,8 +147,8 @@ def test_tight_bends_and_overlaps_are_refused_naming_yarns():
     # crossing yarns pressed together: no clearance and a flat wave
     squeezed = dataclasses.replace(plain(n_fibres=7), clearance_m=0.0, plateau=0.0)
     squeezed = dataclasses.replace(squeezed, warp=dataclasses.replace(
-        squeezed.warp, height_m=0.2e-3), weft=dataclasses.replace(squeezed.weft,
-                                                                   height_m=0.2e-3))
+        squeezed.warp, height_m=0.2e-3, linear_density_tex=300),
+        weft=dataclasses.replace(squeezed.weft, height_m=0.2e-3, linear_density_tex=300))
     with pytest.raises(InputError) as err:
         render_fabric(squeezed)
     msg = str(err.value)

@@ -89,8 +89,34 @@ def summarise(model, scene) -> dict:
         "tiling": info["tiling"],
         "areal_density_kg_m2": info["areal_density_kg_m2"],
         "crimp": info["crimp"],
+        "datasheet": info.get("datasheet"),
+        "yarn_packing": info.get("yarn_packing"),
         "critical_time_step_s": dt,
     }
+
+
+def datasheet_lines(s: dict) -> str:
+    """Areal density, thickness and yarn packing built, against the datasheet (text)."""
+    ds = s.get("datasheet") or {}
+    rho = 1e3 * s["areal_density_kg_m2"]
+    line = f"  areal density {rho:.4g} g/m²"
+    if ds.get("areal_density_kg_m2"):
+        line += (f" (datasheet {1e3 * ds['areal_density_kg_m2']:.4g} g/m², "
+                 f"{100 * ds['areal_density_deviation']:+.1f} %)")
+    line += f"; loose thickness {1e3 * s['thickness_m']:.3g} mm"
+    if ds.get("thickness_m"):
+        at = ds.get("thickness_pressure_pa")
+        line += (f" (datasheet {1e3 * ds['thickness_m']:.3g} mm"
+                 + (f" at {1e-3 * at:.3g} kPa" if at else "") + ")")
+    pack = s.get("yarn_packing") or {}
+    if pack:
+        line += "\n  yarn packing: " + ", ".join(
+            f"{f} Vf {p['yarn_fibre_volume_fraction']:.2f} ({p['shape']} "
+            f"{1e3 * p['width_m']:.3g} x {1e3 * p['height_m']:.3g} mm"
+            + (f", woven width {1e3 * p['woven_width_m']:.3g} mm"
+               if abs(p["woven_width_m"] - p["width_m"]) > 1e-12 else "") + ")"
+            for f, p in pack.items())
+    return line
 
 
 def run(args) -> int:
@@ -108,6 +134,7 @@ def run(args) -> int:
                 f"  size {s['fabric_size_m'][0] * 1e3:.4g} x {s['fabric_size_m'][1] * 1e3:.4g} mm,"
                 f" thickness {s['thickness_m'] * 1e3:.3g} mm, smallest gap between yarns "
                 + (f"{clear * 1e3:.3g} mm" if clear is not None else "(none near)") + "\n"
+                + datasheet_lines(s) + "\n"
                 f"  built in {s['build_s']:.2f} s, written in {s['write_s']:.2f} s; "
                 f"results in {s['run_dir']}")
         emit(s, args.json, text)

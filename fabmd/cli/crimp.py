@@ -36,6 +36,22 @@ def run(args) -> int:
             f"  thickness {1e3 * lo['thickness_m']:.3f} -> {1e3 * cr['thickness_m']:.3f} mm\n"
             f"  crimp per fibre {crimps}\n"
             f"  fibre volume fraction {cr['fibre_volume_fraction']:.3f}\n"
+            f"  {_datasheet_line(s)}\n"
             f"  results in {result.run_dir}")
     emit(s, args.json, text)
     return 0
+
+
+def _datasheet_line(s: dict) -> str:
+    """Areal density (against the datasheet), yarn packing and the pass-through check."""
+    ds = s.get("datasheet") or {}
+    text = f"areal density {1e3 * s['areal_density_kg_m2']:.4g} g/m²"
+    if ds.get("areal_density_kg_m2"):
+        text += (f" (datasheet {1e3 * ds['areal_density_kg_m2']:.4g} g/m², "
+                 f"{100 * (s['areal_density_kg_m2'] / ds['areal_density_kg_m2'] - 1):+.1f} %)")
+    sections = s["crimped"].get("yarn_sections", {})
+    text += "; yarn Vf " + ", ".join(
+        f"{f} {v['fibre_volume_fraction']:.2f}" for f, v in sections.items()
+        if v.get("fibre_volume_fraction") is not None)
+    text += f"; yarns passed through: {s['pass_through']['flipped_pairs']} flipped pairs"
+    return text

@@ -12,16 +12,25 @@ Across the fabric (y) the unit cell has ``dents`` dents; dent *k* holds one stac
 of stuffer warps at y = (k + ¼)·p and one plane of binders at y = (k + ¾)·p
 (p: warp spacing, the pitch of the stacks). A binder is given by its gap at each
 weft column (the general form): ``binder_paths[dent][binder][column]``.
-Between columns it passes smoothly from one gap to the next.
+Between columns it passes smoothly from one gap to the next. With
+``separate_binders`` every binder of a dent has its own plane instead: the n
+binders of dent *k* lie at y = (k + ¼ + (b + 1)/(n + 1))·p, evenly between the
+dent's stuffer stack and the next (binder spacing p/(n + 1), set apart from the
+stuffer spacing p); binders in different planes may cross each other. A dent
+may then have no binder (an empty list: binders every n-th dent).
 
 Named architectures (see the constructors):
 
 * :meth:`Architecture3D.orthogonal` — binders go straight through the whole
   thickness between weft columns, over ``float_columns`` columns on each face;
 * :meth:`Architecture3D.layer_to_layer` — angle interlock in which each binder
-  links ``depth`` + 1 neighbouring weft layers (one binder per starting layer);
-* :meth:`Architecture3D.through_thickness` — angle interlock in which one binder
-  per dent crosses the whole thickness diagonally, one gap per ``step`` columns.
+  links ``depth`` + 1 neighbouring weft layers (one binder per starting layer),
+  any number of columns;
+* :meth:`Architecture3D.through_thickness` — angle interlock in which binders
+  cross the whole thickness diagonally, one gap per ``step`` columns; any number
+  of columns (a cell that is not a whole number of binder periods spreads one
+  period over the cell, rounding each column's gap), any number of binders per
+  dent (side by side), binders in every ``binder_every``-th dent.
 """
 
 from __future__ import annotations
@@ -46,6 +55,8 @@ class Architecture3D:
             (default: the inner gaps 1 … L − 1).
         name: label used in outputs.
         allow_floats: accept a binder that stays in one gap (binds nothing).
+        separate_binders: every binder of a dent in its own plane (see the module
+            docstring); default: the binders of a dent share one plane.
     """
 
     weft_layers: int
@@ -53,12 +64,16 @@ class Architecture3D:
     warp_gaps: tuple | None = None
     name: str = "3d"
     allow_floats: bool = False
+    separate_binders: bool = False
 
     def __post_init__(self):
         n_layers = inputs.positive_int("architecture.weft_layers", self.weft_layers)
         object.__setattr__(self, "weft_layers", n_layers)
-        object.__setattr__(self, "binder_paths", _check_paths(self.binder_paths, n_layers,
-                                                              self.allow_floats))
+        if not isinstance(self.separate_binders, bool):
+            raise InputError(f"architecture.separate_binders must be true or false, "
+                             f"got {self.separate_binders!r}")
+        object.__setattr__(self, "binder_paths", _check_paths(
+            self.binder_paths, n_layers, self.allow_floats, self.separate_binders))
         gaps = tuple(range(1, n_layers)) if self.warp_gaps is None else self.warp_gaps
         if not isinstance(gaps, list | tuple | np.ndarray):
             raise InputError(f"architecture.warp_gaps must be a list of gaps 0..{n_layers}, "
@@ -77,22 +92,30 @@ class Architecture3D:
     # -- constructors ------------------------------------------------------------------
     @classmethod
     def orthogonal(cls, weft_layers: int = 3, float_columns: int = 1, dents: int = 2,
-                   columns: int | None = None, warp_gaps=None) -> Architecture3D:
-        """Binders over ``float_columns`` weft columns on top, then the same below."""
+                   columns: int | None = None, warp_gaps=None,
+                   binder_every: int = 1) -> Architecture3D:
+        """Binders over ``float_columns`` weft columns on top, then the same below
+        (in every ``binder_every``-th dent only)."""
         n_layers = inputs.positive_int("architecture.weft_layers", weft_layers)
         f = inputs.positive_int("architecture.float_columns", float_columns)
         dents = inputs.positive_int("architecture.dents", dents)
         period = 2 * f
         columns = _columns(columns, period)
         base = [0 if (c % period) < f else n_layers for c in range(columns)]
-        paths = [[_shift(base, (k % 2) * f)] for k in range(dents)]
+        every = inputs.positive_int("architecture.binder_every", binder_every)
+        paths = [[_shift(base, (k % 2) * f)] if k % every == 0 else [] for k in range(dents)]
         return cls(n_layers, paths, warp_gaps, name=f"orthogonal (float {f})")
 
     @classmethod
     def layer_to_layer(cls, weft_layers: int = 4, depth: int = 1, step: int = 1,
                        dents: int = 2, columns: int | None = None,
-                       warp_gaps=None) -> Architecture3D:
-        """Angle interlock: binder *b* runs between gaps b and b + depth + 1."""
+                       warp_gaps=None, binder_every: int = 1) -> Architecture3D:
+        """Angle interlock: binder *b* runs between gaps b and b + depth + 1.
+
+        ``columns`` that are not a multiple of the period 2·(depth + 1)·step spread one
+        period over the cell (each column's gap rounded); ``binder_every``: binders in
+        every n-th dent only.
+        """
         n_layers = inputs.positive_int("architecture.weft_layers", weft_layers)
         depth = inputs.positive_int("architecture.depth", depth)
         if depth >= n_layers:
@@ -101,25 +124,60 @@ class Architecture3D:
         step = inputs.positive_int("architecture.step", step)
         dents = inputs.positive_int("architecture.dents", dents)
         period = 2 * (depth + 1) * step
-        columns = _columns(columns, period)
-        wave = _triangle(depth + 1, step, columns)
+        if columns is None or (isinstance(columns, int) and columns % period == 0):
+            columns = _columns(columns, period)
+            wave = _triangle(depth + 1, step, columns)
+        else:
+            columns = inputs.positive_int("architecture.columns", columns, minimum=2)
+            period = columns
+            wave = _spread_triangle(depth + 1, columns)
+        every = inputs.positive_int("architecture.binder_every", binder_every)
         paths = [[_shift([b + w for w in wave], (k * period) // dents)
-                  for b in range(n_layers - depth)] for k in range(dents)]
+                  for b in range(n_layers - depth)] if k % every == 0 else []
+                 for k in range(dents)]
         return cls(n_layers, paths, warp_gaps, name=f"layer-to-layer angle interlock "
                                                     f"(depth {depth}, step {step})")
 
     @classmethod
     def through_thickness(cls, weft_layers: int = 4, step: int = 1, dents: int = 2,
-                          columns: int | None = None, warp_gaps=None) -> Architecture3D:
-        """Angle interlock: one binder per dent crosses all L layers diagonally."""
+                          columns: int | None = None, warp_gaps=None, binders: int = 1,
+                          binder_every: int = 1) -> Architecture3D:
+        """Angle interlock: binders cross all L layers diagonally.
+
+        Args:
+            weft_layers: weft layers L.
+            step: columns per gap change.
+            dents: stuffer stacks across the cell.
+            columns: weft columns per cell; a multiple of the period 2·L·step keeps
+                the exact triangle wave, any other number (>= 2) spreads one binder
+                period over the cell (each column's gap rounded from the triangle).
+            warp_gaps: gaps holding stuffers (default the inner ones).
+            binders: binders per binding dent, side by side in their own planes
+                when > 1, their phases spread evenly over the period.
+            binder_every: binders in every n-th dent only (dent 0, n, 2n, ...).
+        """
         n_layers = inputs.positive_int("architecture.weft_layers", weft_layers)
         step = inputs.positive_int("architecture.step", step)
         dents = inputs.positive_int("architecture.dents", dents)
+        binders = inputs.positive_int("architecture.binders", binders)
+        every = inputs.positive_int("architecture.binder_every", binder_every)
         period = 2 * n_layers * step
-        columns = _columns(columns, period)
-        wave = _triangle(n_layers, step, columns)
-        paths = [[_shift(wave, (k * period) // dents)] for k in range(dents)]
-        return cls(n_layers, paths, warp_gaps,
+        if columns is None or (isinstance(columns, int) and columns % period == 0):
+            columns = _columns(columns, period)
+            wave = _triangle(n_layers, step, columns)
+        else:
+            columns = inputs.positive_int("architecture.columns", columns, minimum=2)
+            period = columns
+            wave = _spread_triangle(n_layers, columns)
+        binding = [k for k in range(dents) if k % every == 0]
+        total = len(binding) * binders
+        paths = [[] for _ in range(dents)]
+        for q, k in enumerate(k for k in binding for _ in range(binders)):
+            shift = (k * period) // dents if binders == 1 and every == 1 \
+                else (q * period) // total
+            paths[k].append(_shift(wave, shift))
+        separate = binders > 1 or every > 1
+        return cls(n_layers, paths, warp_gaps, separate_binders=separate,
                    name=f"through-thickness angle interlock (step {step})")
 
     # -- derived -----------------------------------------------------------------------
@@ -163,6 +221,11 @@ def _columns(columns, period: int) -> int:
     return columns
 
 
+def _spread_triangle(height: int, columns: int) -> list[int]:
+    """One triangle wave 0 → height → 0 spread over ``columns`` columns, rounded."""
+    return [int(round(height * (1.0 - abs(1.0 - 2.0 * c / columns)))) for c in range(columns)]
+
+
 def _triangle(height: int, step: int, columns: int) -> list[int]:
     """0, 1, …, height, …, 1 with each level held ``step`` columns, repeated."""
     period = 2 * height
@@ -175,7 +238,7 @@ def _shift(path: list[int], k: int) -> list[int]:
     return list(path[-k:] + path[:-k]) if k else list(path)
 
 
-def _check_paths(paths, n_layers: int, allow_floats: bool) -> tuple:
+def _check_paths(paths, n_layers: int, allow_floats: bool, separate: bool = False) -> tuple:
     where = "architecture.binder_paths"
     if not isinstance(paths, list | tuple) or not paths:
         raise InputError(f"{where} must be a list of dents, each a list of binders, each the "
@@ -207,7 +270,7 @@ def _check_paths(paths, n_layers: int, allow_floats: bool) -> tuple:
                 raise InputError(f"{where}: {name} stays in gap {path[0]} at every column and "
                                  f"binds nothing; change its path or set allow_floats = true")
             clean_dent.append(tuple(int(g) for g in path))
-        for a in range(len(clean_dent)):
+        for a in range(0 if separate else len(clean_dent)):  # separate planes may cross
             for b in range(a + 1, len(clean_dent)):
                 pa, pb = np.array(clean_dent[a]), np.array(clean_dent[b])
                 same = np.flatnonzero(pa == pb)

@@ -19,8 +19,9 @@ thickness, the fabric's mid-plane is z = 0 and the unit cell starts at x = y = 0
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,7 +31,7 @@ from ..model.material import FibreMaterial
 from ..units import TEX, quantity
 from .architecture3d import Architecture3D
 from .paths import YarnPath
-from .section import Section
+from .section import Section, section_height
 from .weave import Weave
 
 FAMILIES = ("warp", "weft", "binder")
@@ -38,29 +39,56 @@ FAMILIES = ("warp", "weft", "binder")
 FAMILY_AXIS = {"warp": 0, "weft": 1, "binder": 0}
 
 
+#: largest yarn fibre volume fraction (filament area / section area) a yarn may have
+PACKING_LIMIT = 0.8
+#: filament count × filament area may differ this much from tex/ρ before a datasheet
+#: is refused as inconsistent
+FILAMENT_TOLERANCE = 0.1
+#: a datasheet areal density may fall this much short of the straight yarns' mass
+AREAL_DENSITY_TOLERANCE = 0.03
+#: and exceed it by at most this mean crimp
+MAX_DATASHEET_CRIMP = 0.3
+
+
 @dataclass(frozen=True)
 class YarnSpec:
-    """One yarn family.
+    """One yarn family (or, from a datasheet, its tex, fibre and packing).
 
     Args:
         linear_density_tex: linear density [tex = g/km] (accepts "1200 tex", "1.2 ktex").
         material: filament material.
-        width_m: section width in the fabric plane [m] (accepts "2 mm").
+        width_m: section width in the fabric plane [m] (accepts "2 mm"); default:
+            the yarn spacing (a dense fabric whose yarns fill their spacing).
         n_fibres: virtual fibres per yarn (>= 1; 1, 7, 19, 37, 61 are full hexagons).
-        height_m: section height [m]; default = width (circular section).
+        height_m: section height [m]; default: the height at which the section holds
+            the filament area tex/ρ at ``fibre_volume_fraction``, or = width (circle)
+            when that is not given.
         spacing_m: distance between neighbouring yarns of this family [m].
         count_per_m: or yarns per length [1/m] (accepts "4 ends/cm", "3 picks/cm").
         name: label of the family's yarn type in outputs.
+        shape: section shape, ``"ellipse"``, ``"lenticular"`` or ``"racetrack"``.
+        fibre_volume_fraction: the packing the section is sized for (filament area
+            over section area, in (0, 0.8]); used when ``height_m`` is left out.
+        filament_diameter_m: diameter of one filament [m] (datasheet; "7 um").
+        filament_count: filaments per yarn (datasheet; "3K" = 3000). With the
+            diameter, count·π·d²/4 must agree with tex/ρ within 10 %.
+
+    Every yarn's filament area tex/ρ must fit its section at a yarn fibre volume
+    fraction of at most :data:`PACKING_LIMIT`.
     """
 
     linear_density_tex: float
     material: FibreMaterial
-    width_m: float
+    width_m: float | None = None
     n_fibres: int = 7
     height_m: float | None = None
     spacing_m: float | None = None
     count_per_m: float | None = None
     name: str = ""
+    shape: str = "ellipse"
+    fibre_volume_fraction: float | None = None
+    filament_diameter_m: float | None = None
+    filament_count: int | None = None
 
     def __post_init__(self):
         tex = self.linear_density_tex
@@ -71,11 +99,11 @@ class YarnSpec:
         if not isinstance(self.material, FibreMaterial):
             raise InputError(f"yarn.material must be a FibreMaterial, got {self.material!r}")
         object.__setattr__(self, "n_fibres", inputs.positive_int("yarn.n_fibres", self.n_fibres))
-        section = Section(self.width_m, self.height_m)
-        object.__setattr__(self, "width_m", section.width_m)
-        object.__setattr__(self, "height_m", section.height_m)
         if self.spacing_m is not None and self.count_per_m is not None:
-            raise InputError("give yarn.spacing_m or yarn.count_per_m, not both")
+            if isinstance(self.spacing_m, str) or isinstance(self.count_per_m, str) \
+                    or not math.isclose(self.spacing_m * self.count_per_m, 1.0, rel_tol=1e-9):
+                raise InputError("give yarn.spacing_m or yarn.count_per_m, not both")
+            object.__setattr__(self, "spacing_m", None)  # a copy: count_per_m sets it again
         if self.spacing_m is not None:
             object.__setattr__(self, "spacing_m", inputs.positive(
                 "yarn.spacing_m", quantity(self.spacing_m, "length", "yarn.spacing_m")))
@@ -84,10 +112,77 @@ class YarnSpec:
                 self.count_per_m, "count_per_length", "yarn.count_per_m"))
             object.__setattr__(self, "count_per_m", count)
             object.__setattr__(self, "spacing_m", 1.0 / count)
+        self._check_filaments()
+        width = self.width_m
+        if width is None:
+            if self.spacing_m is None:
+                raise InputError("yarn.width_m is needed when the yarn has no spacing_m or "
+                                 "count_per_m (the default width is the spacing)")
+            width = self.spacing_m
+        width = inputs.positive("yarn.width_m", quantity(width, "length", "yarn.width_m"))
+        height = self.height_m
+        if self.fibre_volume_fraction is not None:
+            vf = inputs.in_range("yarn.fibre_volume_fraction", self.fibre_volume_fraction,
+                                 0.0, PACKING_LIMIT, low_open=True)
+            object.__setattr__(self, "fibre_volume_fraction", float(vf))
+            if height is None:
+                height = section_height(self.filament_area_m2 / vf, width, self.shape)
+        section = Section(width, height, self.shape)
+        object.__setattr__(self, "width_m", section.width_m)
+        object.__setattr__(self, "height_m", section.height_m)
+        vf = self.yarn_fibre_volume_fraction
+        if vf > PACKING_LIMIT * (1 + 1e-9):
+            raise InputError(
+                f"yarn{' ' + self.name if self.name else ''}: filament area "
+                f"{1e6 * self.filament_area_m2:.4g} mm² ({self.linear_density_tex:g} tex / "
+                f"{self.material.density_kg_m3:g} kg/m³) in its {1e3 * self.width_m:.4g} x "
+                f"{1e3 * self.height_m:.4g} mm {self.shape} section "
+                f"({1e6 * section.area_m2:.4g} mm²) is a yarn fibre volume fraction of "
+                f"{vf:.3g}, above the packing limit {PACKING_LIMIT:g}: enlarge the section "
+                f"(height_m, width_m) or leave height_m out and give fibre_volume_fraction")
+
+    def _check_filaments(self) -> None:
+        d, n = self.filament_diameter_m, self.filament_count
+        if d is not None:
+            d = inputs.positive("yarn.filament_diameter_m",
+                                quantity(d, "length", "yarn.filament_diameter_m"))
+            object.__setattr__(self, "filament_diameter_m", d)
+        if n is not None:
+            if isinstance(n, str) and n.strip().upper().endswith("K"):
+                try:
+                    n = int(round(float(n.strip()[:-1]) * 1000))
+                except ValueError:
+                    raise InputError(f"yarn.filament_count must be a number or like "
+                                     f"'3K', got {self.filament_count!r}") from None
+            object.__setattr__(self, "filament_count", inputs.positive_int(
+                "yarn.filament_count", n))
+            n = self.filament_count
+        if d is None or n is None:
+            return
+        area = n * math.pi * d * d / 4.0
+        ratio = area / self.filament_area_m2
+        if abs(ratio - 1.0) > FILAMENT_TOLERANCE:
+            raise InputError(
+                f"yarn datasheet is inconsistent: {n} filaments x pi/4 x "
+                f"({1e6 * d:.3g} um)² = {1e6 * area:.4g} mm² but {self.linear_density_tex:g} "
+                f"tex / {self.material.density_kg_m3:g} kg/m³ = "
+                f"{1e6 * self.filament_area_m2:.4g} mm² ({100 * (ratio - 1):+.0f} %, allowed "
+                f"±{100 * FILAMENT_TOLERANCE:.0f} %): check tex, fibre density, filament "
+                f"diameter or count")
+
+    @property
+    def filament_area_m2(self) -> float:
+        """Filament cross-section of the yarn, tex·1e-6/ρ [m²]."""
+        return self.linear_density_tex * TEX / self.material.density_kg_m3
+
+    @property
+    def yarn_fibre_volume_fraction(self) -> float:
+        """Filament area over section area (the yarn's packing)."""
+        return self.filament_area_m2 / self.section.area_m2
 
     @property
     def section(self) -> Section:
-        return Section(self.width_m, self.height_m)
+        return Section(self.width_m, self.height_m, self.shape)
 
     @property
     def linear_density_kg_m(self) -> float:
@@ -112,6 +207,22 @@ class Fabric:
             of the smallest yarn height.
         plateau: fraction of a crossed yarn's half-width over which a crimped
             yarn stays level, in [0, 1) (0: pure cosine waves).
+        areal_density_kg_m2: datasheet areal density [kg/m²] (accepts "200 g/m2");
+            checked against the straight yarns' mass Σ tex·count (it may exceed it
+            by the crimp, at most :data:`MAX_DATASHEET_CRIMP`, and fall short by at
+            most :data:`AREAL_DENSITY_TOLERANCE`) and reported against the built one.
+        thickness_m: datasheet thickness [m] (stored and reported; calibration uses it).
+        thickness_pressure_pa: the pressure the thickness is quoted at [Pa].
+        auto_clearance: choose the loose state for a dense fabric (scene files:
+            ``clearance_m = "auto"``): the build lifts crossing yarns (and 3D levels) apart
+            (``lift_m``, growing per try) until no yarns overlap (the crimp stage
+            compacts them again). With it, or for yarns sized from a
+            ``fibre_volume_fraction``, 2D yarns wider than their spacing less the
+            clearance are built narrower and taller (same section area; the crimp
+            stage spreads them); ``woven_width_m`` keeps the width given.
+        lift_m: extra separation through the thickness between crossing yarns
+            (2D) or neighbouring levels (3D) of the loose state [m], on top of the
+            clearance.
     """
 
     architecture: Weave | Architecture3D
@@ -122,6 +233,13 @@ class Fabric:
     periodic: bool = False
     clearance_m: float | None = None
     plateau: float = 0.5
+    areal_density_kg_m2: float | None = None
+    thickness_m: float | None = None
+    thickness_pressure_pa: float | None = None
+    auto_clearance: bool = False
+    lift_m: float = 0.0
+    #: per family, the width given for the woven yarn where the loose one is narrower [m]
+    woven_width_m: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
         arch = self.architecture
@@ -138,11 +256,13 @@ class Fabric:
             if not isinstance(self.binder, YarnSpec):
                 raise InputError(f"fabric.binder (yarns.binder) is required: the 3D "
                                  f"architecture has {arch.n_binders} binder yarns")
+            pitch = self.binder_pitch_m()
             if self.binder.spacing_m is not None and not math.isclose(
-                    self.binder.spacing_m, self.warp.spacing_m, rel_tol=1e-9):
+                    self.binder.spacing_m, pitch, rel_tol=1e-9):
                 raise InputError(f"yarns.binder.spacing_m = {self.binder.spacing_m:g} m must "
-                                 f"equal the warp spacing {self.warp.spacing_m:g} m (one binder "
-                                 f"plane per dent) or be left out")
+                                 f"equal the binder plane pitch {pitch:g} m (the warp spacing "
+                                 f"{self.warp.spacing_m:g} m over the binder planes per dent "
+                                 f"+ 1 when separate) or be left out")
         elif self.binder is not None:
             raise InputError("fabric.binder (yarns.binder) is only used by 3D architectures")
         tiling = self.tiling
@@ -153,6 +273,12 @@ class Fabric:
                                             inputs.positive_int("fabric.tiling[1]", tiling[1])))
         if not isinstance(self.periodic, bool):
             raise InputError(f"fabric.periodic must be true or false, got {self.periodic!r}")
+        if isinstance(self.clearance_m, str) and self.clearance_m.strip() == "auto":
+            object.__setattr__(self, "auto_clearance", True)
+            object.__setattr__(self, "clearance_m", None)
+        if not isinstance(self.auto_clearance, bool):
+            raise InputError(f"fabric.auto_clearance must be true or false, "
+                             f"got {self.auto_clearance!r}")
         if self.clearance_m is None:
             object.__setattr__(self, "clearance_m",
                                0.1 * min(s.height_m for s in self.specs().values()))
@@ -161,7 +287,83 @@ class Fabric:
                 "fabric.clearance_m", quantity(self.clearance_m, "length",
                                                "fabric.clearance_m")))
         inputs.in_range("fabric.plateau", self.plateau, 0.0, 1.0, high_open=True)
+        object.__setattr__(self, "lift_m", inputs.non_negative(
+            "fabric.lift_m", quantity(self.lift_m, "length", "fabric.lift_m")))
+        object.__setattr__(self, "woven_width_m", dict(self.woven_width_m))  # own copy
+        self._datasheet()
+        if not self.is_3d:
+            self._narrow_loose_yarns()
         self._check_fit()
+
+    def _datasheet(self) -> None:
+        for name, kind in (("areal_density_kg_m2", "areal_density"), ("thickness_m", "length"),
+                           ("thickness_pressure_pa", "pressure")):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, inputs.positive(
+                    f"fabric.{name}", quantity(value, kind, f"fabric.{name}")))
+        if self.thickness_pressure_pa is not None and self.thickness_m is None:
+            raise InputError("fabric.thickness_pressure_pa is given without "
+                             "fabric.thickness_m")
+        target = self.areal_density_kg_m2
+        if target is None:
+            return
+        parts = self.straight_areal_density_kg_m2()
+        straight = sum(parts.values())
+        crimp = target / straight - 1.0
+        terms = " + ".join(
+            f"{fam} {self.specs()[fam].linear_density_tex:g} tex x "
+            f"{parts[fam] / self.specs()[fam].linear_density_kg_m:.4g} m/m² "
+            f"= {1e3 * parts[fam]:.4g} g/m²" for fam in parts)
+        if crimp < -AREAL_DENSITY_TOLERANCE or crimp > MAX_DATASHEET_CRIMP:
+            why = ("lighter than its straight yarns" if crimp < 0 else
+                   f"heavier than its straight yarns by more than "
+                   f"{100 * MAX_DATASHEET_CRIMP:.0f} % crimp")
+            raise InputError(
+                f"fabric datasheet is inconsistent: areal density {1e3 * target:.4g} g/m² is "
+                f"{why}: {terms}, total {1e3 * straight:.4g} g/m² (implied mean crimp "
+                f"{100 * crimp:+.1f} %); check tex, ends/picks per cm and areal density")
+
+    def with_loose_width(self, factor: float) -> Fabric:
+        """2D: the same fabric with warp and weft ``factor`` × as wide and as much taller
+        (same section area) in the loose state; ``woven_width_m`` keeps the given widths."""
+        if factor == 1.0 or self.is_3d:
+            return self
+        specs = {}
+        for fam in ("warp", "weft"):
+            spec = getattr(self, fam)
+            width = factor * spec.width_m
+            specs[fam] = dataclasses.replace(
+                spec, width_m=width, fibre_volume_fraction=None,
+                height_m=section_height(spec.section.area_m2, width, spec.shape))
+        woven = {f: self.woven_width_m.get(f, getattr(self, f).width_m) for f in specs}
+        return dataclasses.replace(self, woven_width_m=woven, **specs)
+
+    def straight_areal_density_kg_m2(self) -> dict[str, float]:
+        """Per family, the mass per fabric area of its yarns laid straight, Σ tex·count [kg/m²]."""
+        lx, ly = self.unit_cell_m
+        counts = self.yarns_per_unit_cell()
+        out = {}
+        for fam, spec in self.specs().items():
+            along = lx if FAMILY_AXIS[fam] == 0 else ly
+            out[fam] = spec.linear_density_kg_m * counts[fam] * along / (lx * ly)
+        return out
+
+    def _narrow_loose_yarns(self) -> None:
+        c = self.clearance_m
+        for fam in ("warp", "weft"):
+            spec = getattr(self, fam)
+            room = spec.spacing_m - c
+            sized = spec.fibre_volume_fraction is not None or fam in self.woven_width_m
+            if spec.width_m <= room * (1 + 1e-12) or not (self.auto_clearance or sized):
+                continue
+            if room <= 0:
+                raise InputError(f"yarns.{fam}: the clearance {c:g} m leaves no room in its "
+                                 f"spacing {spec.spacing_m:g} m")
+            height = section_height(spec.section.area_m2, room, spec.shape)
+            self.woven_width_m.setdefault(fam, spec.width_m)
+            object.__setattr__(self, fam, dataclasses.replace(
+                spec, width_m=room, height_m=height, fibre_volume_fraction=None))
 
     # -- derived -----------------------------------------------------------------------
     @property
@@ -195,6 +397,18 @@ class Fabric:
         lx, ly = self.unit_cell_m
         return lx * self.tiling[0], ly * self.tiling[1]
 
+    def max_binders_per_dent(self) -> int:
+        """3D: most binders in one dent (0 in 2D)."""
+        return max((len(d) for d in self.architecture.binder_paths), default=0) \
+            if self.is_3d else 0
+
+    def binder_pitch_m(self) -> float:
+        """3D: distance between neighbouring binder planes [m] (the warp spacing when a
+        dent's binders share a plane; over (binders per dent + 1) when separate)."""
+        if self.is_3d and self.architecture.separate_binders:
+            return self.warp.spacing_m / (self.max_binders_per_dent() + 1)
+        return self.warp.spacing_m
+
     def spacing(self, family: str) -> float:
         """Distance between neighbouring yarns of a family [m] (binder: the dent pitch)."""
         return self.warp.spacing_m if family == "binder" else getattr(self, family).spacing_m
@@ -215,7 +429,18 @@ class Fabric:
                              f"{c:g} m does not fit the weft spacing {weft.spacing_m:g} m: "
                              f"neighbouring weft yarns would overlap; reduce the width or "
                              f"increase the spacing")
-        if self.is_3d:
+        if self.is_3d and self.architecture.separate_binders:
+            room = self.binder_pitch_m()
+            need = max(0.5 * (self.warp.width_m + self.binder.width_m),
+                       self.binder.width_m) + c
+            if need > room * (1 + 1e-12):
+                raise InputError(
+                    f"binder planes lie {room:g} m apart (warp spacing {self.warp.spacing_m:g} "
+                    f"m over {self.max_binders_per_dent() + 1}): stuffers "
+                    f"({self.warp.width_m:g} m wide) and binders ({self.binder.width_m:g} m "
+                    f"wide) need {need:g} m with the clearance: increase yarns.warp.spacing_m "
+                    f"or reduce the widths")
+        elif self.is_3d:
             room = 0.5 * self.warp.spacing_m
             need = 0.5 * (self.warp.width_m + self.binder.width_m) + c
             if need > room * (1 + 1e-12):
@@ -233,7 +458,7 @@ class Fabric:
     # -- geometry ------------------------------------------------------------------------
     def levels(self) -> dict[str, list[float]]:
         """3D: z of every weft layer (``"weft"``) and gap (``"gap"``) [m]; 2D: crossing offsets."""
-        c = self.clearance_m
+        c = self.clearance_m + self.lift_m  # the lift dilates the loose state in z
         if not self.is_3d:
             half = 0.25 * (self.warp.height_m + self.weft.height_m) + 0.5 * c
             return {"crossing_half_separation": [half]}
@@ -291,8 +516,10 @@ class Fabric:
                                         z_m=lev["weft"][k], level=k))
             for d, dent in enumerate(a.binder_paths):
                 for b, path in enumerate(dent):
+                    y = (d + 0.75) * p if not a.separate_binders else \
+                        (d + 0.25 + (b + 1) * self.binder_pitch_m() / p) * p
                     out.append(YarnPath(f"binder-d{d + 1}-{b + 1}", "binder", 0,
-                                        (d + 0.75) * p, lx, lx, tuple(cols),
+                                        y, lx, lx, tuple(cols),
                                         tuple(lev["gap"][g] for g in path),
                                         (f * 0.5 * self.weft.width_m,), level=min(path)))
         return [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,

@@ -1,7 +1,16 @@
 """Yarn cross-sections and the packing of virtual fibres in them.
 
-A yarn section is an ellipse of ``width_m`` (in the fabric plane, across the
-yarn) and ``height_m`` (through the thickness); a circle when both are equal.
+A yarn section has a ``width_m`` (in the fabric plane, across the yarn), a
+``height_m`` (through the thickness) and a ``shape``:
+
+* ``"ellipse"`` (default; a circle when width = height), area π·w·h/4;
+* ``"lenticular"`` — a lens bounded by two parabolic arcs, half-thickness
+  (h/2)·(1 − (2u/w)²), area 2·w·h/3 (the usual section of a flattened roving);
+* ``"racetrack"`` — a rectangle with semicircular ends of diameter h (w ≥ h),
+  area (w − h)·h + π·h²/4.
+
+:meth:`Section.area_m2` gives the area, so a yarn's fibre volume fraction is its
+filament area (tex/ρ) over it.
 
 Packing of N virtual fibres (:func:`hex_packing`, documented rule): take the
 sites of a hexagonal lattice with unit spacing (rows along the width) and keep
@@ -16,9 +25,11 @@ ellipse gets flat, wide packings (e.g. rows of 4 + 3 for N = 7 at width/height
 = 2). Any N >= 1 works.
 
 Contact diameter d: the lattice is scaled to spacing d, with d the largest value
-for which every fibre lies inside the section — each fibre centre inside the
-ellipse of semi-axes (w/2 − d/2, h/2 − d/2). Neighbouring fibres then touch and
-the outer ones touch the yarn boundary: for a circle of diameter D this is
+for which every fibre lies inside the section — for an ellipse each fibre centre
+inside the ellipse of semi-axes (w/2 − d/2, h/2 − d/2); for the other shapes each
+fibre centre inside the shape and at least d/2 from its (finely sampled)
+outline. Neighbouring fibres then touch and the outer ones touch the yarn
+boundary: for a circle of diameter D this is
 d = D/3 for 7 fibres, D/5 for 19, D/7 for 37, D/9 for 61. The mechanical
 (filament) area of each fibre comes from the linear density, not from d (see
 :meth:`fabmd.model.material.VirtualFibre.from_yarn`).
@@ -33,13 +44,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import inputs
+from ..errors import InputError
 from ..units import quantity
+
+#: section shapes (see the module docstring)
+SHAPES = ("ellipse", "lenticular", "racetrack")
 
 
 @functools.lru_cache(maxsize=64)
 def _hex_packing(n: int, aspect: float, shift: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
-    k = int(math.ceil(math.sqrt(n) * max(aspect, 1.0 / aspect, 1.0))) + 3
-    i, j = np.meshgrid(np.arange(-2 * k, 2 * k + 1), np.arange(-2 * k, 2 * k + 1))
+    # the n nearest sites lie well within these ranges (rows j, sites i along a row);
+    # a flat section needs long rows but few of them
+    kj = int(math.ceil(math.sqrt(n) * max(1.0 / aspect, 1.0))) + 3
+    ki = int(math.ceil(math.sqrt(n) * max(aspect, 1.0))) + 3 + kj
+    i, j = np.meshgrid(np.arange(-2 * ki, 2 * ki + 1), np.arange(-2 * kj, 2 * kj + 1))
     u = (i + 0.5 * j).ravel() - shift[0]
     v = (j * math.sqrt(3.0) / 2.0).ravel() - shift[1]
     dist = np.round(np.hypot(u / aspect, v), 9)
@@ -62,17 +80,49 @@ def hex_packing(n: int, aspect: float = 1.0) -> np.ndarray:
     return _hex_packing(n, float(aspect)).copy()
 
 
+def area_factor(shape: str, aspect: float = 1.0) -> float:
+    """Section area over width × height for a shape at width/height ``aspect``."""
+    if shape == "ellipse":
+        return math.pi / 4.0
+    if shape == "lenticular":
+        return 2.0 / 3.0
+    if shape == "racetrack":
+        return 1.0 - (1.0 - math.pi / 4.0) / aspect
+    raise InputError(f"yarn.shape must be one of {', '.join(SHAPES)}, got {shape!r}")
+
+
+def section_height(area_m2: float, width_m: float, shape: str) -> float:
+    """Height [m] of a section of ``shape`` and width ``width_m`` [m] whose area is ``area_m2``.
+
+    Raises:
+        InputError: a racetrack that cannot hold the area at that width (its height
+            would exceed its width).
+    """
+    if shape == "racetrack":
+        k = 1.0 - math.pi / 4.0  # area = w·h − k·h²
+        disc = width_m * width_m - 4.0 * k * area_m2
+        h = (width_m - math.sqrt(disc)) / (2.0 * k) if disc >= 0 else math.inf
+        if h > width_m:
+            raise InputError(f"a racetrack section {1e3 * width_m:.4g} mm wide holds at most "
+                             f"{1e6 * math.pi * width_m ** 2 / 4:.4g} mm², not "
+                             f"{1e6 * area_m2:.4g} mm²: widen it or raise the packing")
+        return h
+    return area_m2 / (area_factor(shape) * width_m)
+
+
 @dataclass(frozen=True)
 class Section:
-    """Elliptical yarn cross-section.
+    """Yarn cross-section (see the module docstring for the shapes).
 
     Args:
         width_m: extent across the yarn in the fabric plane [m] (accepts "2 mm").
         height_m: extent through the thickness [m]; default = width (circle).
+        shape: ``"ellipse"``, ``"lenticular"`` or ``"racetrack"``.
     """
 
     width_m: float
     height_m: float | None = None
+    shape: str = "ellipse"
 
     def __post_init__(self):
         w = inputs.positive("yarn.width_m", quantity(self.width_m, "length", "yarn.width_m"))
@@ -80,15 +130,36 @@ class Section:
             "yarn.height_m", quantity(self.height_m, "length", "yarn.height_m"))
         object.__setattr__(self, "width_m", w)
         object.__setattr__(self, "height_m", h)
+        area_factor(self.shape)  # validates the name
+        if self.shape == "racetrack" and w < h * (1 - 1e-12):
+            raise InputError(f"yarn.width_m = {w:g} m of a racetrack section must be >= its "
+                             f"height_m = {h:g} m (semicircular ends of diameter = height)")
 
     @property
     def aspect(self) -> float:
         return self.width_m / self.height_m
 
+    @property
+    def area_m2(self) -> float:
+        """Section area [m²]."""
+        return area_factor(self.shape, self.aspect) * self.width_m * self.height_m
+
+    def half_thickness_m(self, across_m: np.ndarray) -> np.ndarray:
+        """Half of the section's height at ``across_m`` from its centre line [m] (0 outside)."""
+        u = np.abs(np.asarray(across_m, float))
+        a, b = 0.5 * self.width_m, 0.5 * self.height_m
+        q = np.clip(1.0 - (u / a) ** 2, 0.0, None)
+        if self.shape == "ellipse":
+            return b * np.sqrt(q)
+        if self.shape == "lenticular":
+            return b * q
+        flat = a - b  # racetrack: straight part, then semicircles of radius b
+        return np.where(u <= flat, b, np.sqrt(np.clip(b * b - (u - flat) ** 2, 0.0, None)))
+
     def packing(self, n_fibres: int) -> tuple[np.ndarray, float]:
         """Fibre centre offsets (n, 2) [m] (across, through-thickness) and contact diameter [m]."""
         unit, d = _best_packing(int(inputs.positive_int("yarn.n_fibres", n_fibres)),
-                                float(self.width_m), float(self.height_m))
+                                float(self.width_m), float(self.height_m), self.shape)
         return d * unit, d
 
     def fill_fraction(self, n_fibres: int) -> float:
@@ -97,19 +168,46 @@ class Section:
         return n_fibres * d * d / (self.width_m * self.height_m)
 
 
-def _fit(unit: np.ndarray, a: float, b: float) -> float:
-    """Largest d with every fibre of ``d·unit`` (radius d/2) inside the ellipse (a, b)."""
-    def fits(d: float) -> bool:
-        ra, rb = a - 0.5 * d, b - 0.5 * d
-        if ra <= 0 or rb <= 0:
-            return False
-        return bool(np.all((d * unit[:, 0] / ra) ** 2 + (d * unit[:, 1] / rb) ** 2
-                           <= 1.0 + 1e-12))
+#: points sampling the outline of a non-elliptical section (per half)
+_OUTLINE_POINTS = 200
+
+
+def _outline(section: Section) -> np.ndarray:
+    u = 0.5 * section.width_m * np.cos(np.linspace(0.0, math.pi, _OUTLINE_POINTS))
+    t = section.half_thickness_m(u)
+    return np.vstack([np.column_stack([u, t]), np.column_stack([u, -t])[::-1]])  # closed loop
+
+
+def _fit(unit: np.ndarray, a: float, b: float, shape: str = "ellipse") -> float:
+    """Largest d with every fibre of ``d·unit`` (radius d/2) inside the section of
+    half-width a, half-height b."""
+    if shape == "ellipse":
+        def fits(d: float) -> bool:
+            ra, rb = a - 0.5 * d, b - 0.5 * d
+            if ra <= 0 or rb <= 0:
+                return False
+            return bool(np.all((d * unit[:, 0] / ra) ** 2 + (d * unit[:, 1] / rb) ** 2
+                               <= 1.0 + 1e-12))
+    else:
+        sec = Section(2 * a, 2 * b, shape)
+        outline = _outline(sec)
+        start, edge = outline, np.roll(outline, -1, axis=0) - outline
+        length2 = np.maximum(np.einsum("mk,mk->m", edge, edge), 1e-300)
+
+        def fits(d: float) -> bool:
+            c = d * unit
+            if np.any(np.abs(c[:, 1]) >= sec.half_thickness_m(c[:, 0])):
+                return False
+            # distance to the outline's segments (not just its vertices)
+            rel = c[:, None, :] - start[None]
+            t = np.clip(np.einsum("nmk,mk->nm", rel, edge) / length2, 0.0, 1.0)
+            dist = np.linalg.norm(rel - t[..., None] * edge[None], axis=2).min(axis=1)
+            return bool(np.all(dist >= 0.5 * d))
 
     lo, hi = 0.0, 2.0 * min(a, b)
     if fits(hi):
         return hi
-    for _ in range(60):
+    for _ in range(60 if shape == "ellipse" else 32):  # the outline is sampled anyway
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if fits(mid) else (lo, mid)
     return lo
@@ -120,13 +218,14 @@ _SHIFTS = ((0.0, 0.0), (0.5, 0.0), (0.5, math.sqrt(3.0) / 6.0), (0.0, math.sqrt(
 
 
 @functools.lru_cache(maxsize=256)
-def _best_packing(n: int, width: float, height: float) -> tuple[np.ndarray, float]:
+def _best_packing(n: int, width: float, height: float,
+                  shape: str = "ellipse") -> tuple[np.ndarray, float]:
     aspect = width / height
     best = None
     for k in sorted(range(-8, 17), key=abs):
         for shift in _SHIFTS:
             unit = _hex_packing(n, aspect * 2.0 ** (k / 8.0), shift)
-            d = _fit(unit, 0.5 * width, 0.5 * height)
+            d = _fit(unit, 0.5 * width, 0.5 * height, shape)
             if best is None or d > best[1] * (1 + 1e-9):
                 best = (unit, d)
     return best

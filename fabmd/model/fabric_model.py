@@ -23,6 +23,7 @@ need in ``BeadModel.info`` (see :func:`render_fabric`).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -92,8 +93,79 @@ def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads]) -> None:
                 f"{path.family} height")
 
 
+#: loose-state search of ``Fabric.auto_clearance``: 2D loose widths tried (fractions of
+#: the width given; the section area is kept), and per width the lifts tried: 0, then a
+#: quarter of the smallest yarn height growing ×1.5, then bisection of the last step
+LOOSE_WIDTH_FACTORS = (1.0, 0.85, 0.7, 0.55)
+LIFT_TRIES = 7
+LIFT_GROWTH = 1.5
+LIFT_BISECTIONS = 3
+#: a loose state is accepted when the smallest gap between yarns is at least this
+#: fraction of the clearance
+AUTO_GAP_FRACTION = 0.5
+
+
 def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, *,
                   check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
+    """Beads, bonds and types of ``fabric`` (see :func:`render_loose`).
+
+    With ``fabric.auto_clearance`` the loose state of a dense fabric is searched
+    for: at each loose width of :data:`LOOSE_WIDTH_FACTORS` (2D; the narrower
+    yarns are taller, same area, and spread again during the crimp) the crossing
+    yarns are lifted apart (``lift_m``, :data:`LIFT_TRIES` growing tries, then
+    :data:`LIFT_BISECTIONS` halvings) until no yarns overlap and the smallest gap
+    between yarns is :data:`AUTO_GAP_FRACTION` of the clearance. ``info`` records
+    ``lift_m``, ``loose_width_factor`` and ``auto_clearance_tries``.
+    """
+    if not (fabric.auto_clearance and check):
+        return render_loose(fabric, discretisation, check=check, pad_fraction=pad_fraction)
+
+    def attempt(trial: Fabric) -> BeadModel | None:
+        try:
+            model = render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
+        except InputError as exc:
+            if "overlap" not in str(exc):
+                raise
+            attempt.last = str(exc)
+            return None
+        gap = model.info["clearance_m"]
+        if gap is not None and gap < AUTO_GAP_FRACTION * trial.clearance_m:
+            pair = " and ".join(model.info["clearance_pair"] or ())
+            attempt.last = (f"yarns {pair} come within {1e3 * gap:.3g} mm, less than "
+                            f"{AUTO_GAP_FRACTION:g} x the clearance "
+                            f"{1e3 * trial.clearance_m:.3g} mm")
+            return None
+        return model
+
+    tries = 0
+    factors = (1.0,) if fabric.is_3d else LOOSE_WIDTH_FACTORS
+    for factor in factors:
+        base = fabric.with_loose_width(factor)
+        step = 0.25 * min(s.height_m for s in base.specs().values())
+        lifts = [0.0] + [step * LIFT_GROWTH ** k for k in range(LIFT_TRIES - 1)]
+        for k, lift in enumerate(lifts):
+            tries += 1
+            model = attempt(dataclasses.replace(base, lift_m=fabric.lift_m + lift))
+            if model is None:
+                continue
+            low, high = (lifts[k - 1], lift) if k else (0.0, 0.0)
+            for _ in range(LIFT_BISECTIONS if k else 0):
+                tries += 1
+                mid = 0.5 * (low + high)
+                found = attempt(dataclasses.replace(base, lift_m=fabric.lift_m + mid))
+                if found is None:
+                    low = mid
+                else:
+                    high, model = mid, found
+            model.info.update(auto_clearance_tries=tries, loose_width_factor=factor)
+            return model
+    raise InputError(f"{attempt.last} (clearance \"auto\": no loose state found with loose "
+                     f"widths down to {factors[-1]:g} of the given ones and lifts up to "
+                     f"{1e3 * lifts[-1]:.3g} mm)")
+
+
+def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *,
+                 check: bool = True, pad_fraction: float = 0.1) -> BeadModel:
     """Beads, bonds and types of ``fabric``.
 
     Args:
@@ -114,7 +186,11 @@ def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, 
     extent incl. radius), ``crimp`` per family (loose centreline crimp),
     ``areal_density_kg_m2``, ``clearance_m`` (smallest gap between beads of
     different yarns; ``None`` if above the search cutoff), ``clearance_pair``
-    (the two yarns), ``requested_clearance_m``, ``bond_types_per_family``,
+    (the two yarns), ``requested_clearance_m``, ``lift_m`` (loose-state lift),
+    ``datasheet`` (areal density given, built/given − 1, straight-yarn areal density
+    per family, thickness and its pressure), ``yarn_packing`` (per family: yarn fibre
+    volume fraction, filament and section area, shape, width, height, woven width),
+    ``bond_types_per_family``,
     ``build_s`` and ``fabric`` (the description as plain data).
     """
     t0 = time.perf_counter()
@@ -291,7 +367,8 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
         arch_info = {"kind": "3d", "name": arch.name, "weft_layers": arch.weft_layers,
                      "columns": arch.columns, "dents": arch.dents,
                      "warp_gaps": list(arch.warp_gaps),
-                     "binder_paths": [[list(p) for p in dent] for dent in arch.binder_paths]}
+                     "binder_paths": [[list(p) for p in dent] for dent in arch.binder_paths],
+                     "separate_binders": arch.separate_binders}
     else:
         arch_info = {"kind": "2d", "name": arch.name, "matrix": [list(r) for r in arch.matrix]}
     size = fabric.size_m
@@ -325,8 +402,26 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
                 model.yarns[model.yarn_ids[approach.j] - 1].name]
     bt_count = {f: sum(1 for bt in model.bond_type_table if bt.family == f)
                 for f in model.family_names}
+    straight = fabric.straight_areal_density_kg_m2()
+    built = mass / (size[0] * size[1])
+    datasheet = {
+        "areal_density_kg_m2": fabric.areal_density_kg_m2,
+        "areal_density_deviation": None if fabric.areal_density_kg_m2 is None
+        else built / fabric.areal_density_kg_m2 - 1.0,
+        "straight_areal_density_kg_m2": straight,
+        "thickness_m": fabric.thickness_m,
+        "thickness_pressure_pa": fabric.thickness_pressure_pa,
+    }
+    packing = {fam: {"yarn_fibre_volume_fraction": spec.yarn_fibre_volume_fraction,
+                     "filament_area_m2": spec.filament_area_m2,
+                     "section_area_m2": spec.section.area_m2, "shape": spec.shape,
+                     "width_m": spec.width_m, "height_m": spec.height_m,
+                     "woven_width_m": fabric.woven_width_m.get(fam, spec.width_m)}
+               for fam, spec in fabric.specs().items()}
     return {
         "format": INFO_FORMAT,
+        "datasheet": datasheet,
+        "yarn_packing": packing,
         "architecture": arch_info,
         "unit_cell_m": list(fabric.unit_cell_m),
         "tiling": list(fabric.tiling),
@@ -348,6 +443,7 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
         "clearance_m": None if approach is None else approach.gap_m,
         "clearance_pair": pair,
         "requested_clearance_m": fabric.clearance_m,
+        "lift_m": fabric.lift_m,
         "bond_types_per_family": bt_count,
         "discretisation": scene_dict(disc),
         "fabric": scene_dict(fabric),

@@ -36,7 +36,7 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..results.cuts import cut_pngs
 from ..results.folder import read_print_file, write_csv, write_json
-from ..results.measure import fabric_measures
+from ..results.measure import areal_density_kg_m2, fabric_measures, passed_through
 from ..results.plots import plot_curves
 from ..results.preview import preview_png
 from ..results.run_record import RunEnd, read_run_end
@@ -100,6 +100,21 @@ class Crimp:
         if unknown:
             raise InputError(f"crimp.expansion names families {sorted(unknown)} that the fabric "
                              f"does not have (it has {list(model.family_names)})")
+
+    def shrink_warnings(self, model: BeadModel) -> list[str]:
+        """Families told to shrink more than their loose crimp (``model.info["crimp"]``):
+        such a yarn cannot end where a woven fabric is; it is pulled into straight
+        zig-zags and bends what it crosses. One line per family."""
+        loose = model.info.get("crimp") or {}
+        out = []
+        for fam, strain in self.expansion.items():
+            crimp = loose.get(fam)
+            if isinstance(crimp, int | float) and strain < 0 and -strain > crimp:
+                out.append(f"crimp.expansion.{fam} = {strain:g} shrinks the {fam} yarns by "
+                           f"{-100 * strain:.3g} %, more than their loose crimp "
+                           f"{100 * crimp:.3g} %: they end straight and taut, not woven; "
+                           f"shrink them by less than {100 * crimp:.3g} %")
+        return out
 
     def rest_length_scale(self, model: BeadModel) -> dict[int, float]:
         """Final rest-length factor of every bond type (1-based)."""
@@ -198,8 +213,16 @@ class Crimp:
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
             overwrite: bool = False) -> CrimpResult:
-        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures."""
+        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures.
+
+        A shrink beyond a family's loose crimp is warned about (``UserWarning``) and
+        listed in the summary's ``shrink_warnings``.
+        """
         engine = engine or Engine()
+        shrink = self.shrink_warnings(model)
+        if mpi.is_root():
+            for message in shrink:
+                warnings.warn(message, UserWarning, stacklevel=2)
         model = with_room_in_z(model)
         text = self.input_text(model)  # validates before anything is written
         run_dir = write_run_folder(out, PROTOCOL, model, text,
@@ -217,6 +240,7 @@ class Crimp:
         if mpi.is_root():
             crimped, summary = reduce(run_dir, model, self)
             summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
+                           shrink_warnings=shrink,
                            trajectory=trajectory.name if trajectory else None)
             write_json(run_dir / "summary.json", summary)
         summary = mpi.bcast_json(summary)
@@ -320,5 +344,9 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
         "overlap": overlap_summary(run_dir, crimp.contact),
+        # no yarn may pass through another on the way to the woven state
+        "pass_through": passed_through(loose, crimped),
+        "areal_density_kg_m2": areal_density_kg_m2(crimped),
+        "datasheet": loose.info.get("datasheet"),
     }
     return crimped, summary

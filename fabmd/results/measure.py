@@ -120,6 +120,12 @@ def fibre_volume_m3(model: BeadModel) -> float:
     return float(np.sum(a * vec))
 
 
+def areal_density_kg_m2(model: BeadModel) -> float:
+    """Fibre mass per in-plane area [kg/m²]: bead masses without the mass scaling."""
+    scaling = float(model.info.get("discretisation", {}).get("mass_scaling", 1.0))
+    return float(np.sum(model.masses)) / scaling / in_plane_area_m2(model)
+
+
 def in_plane_area_m2(model: BeadModel) -> float:
     """Box area for a periodic model, else the bead bounding box in x-y [m²]."""
     if model.periodic[0] and model.periodic[1]:
