@@ -254,8 +254,8 @@ class DrivenTest:
                     spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"]])
                 warnings.warn(f"{self.protocol} in {run_dir}: not quasi-static "
                               f"({'; '.join(verdict['problems'])}): do not use the curve; "
-                              f"lower speed_fraction (inertia, drag) or check the specimen "
-                              f"holds together", QuasiStaticWarning, stacklevel=2)
+                              f"{'; '.join(verdict['remedies'])}", QuasiStaticWarning,
+                              stacklevel=2)
         if check_rate:
             slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
             other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
@@ -304,11 +304,32 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
               for name in limits}
     problems = [f"{name} = {v:.2g} > {limits[name]:g}" for name, v in values.items()
                 if v is not None and v > limits[name]]
+    failed = [name for name, v in values.items() if v is not None and v > limits[name]]
     if summary.get("start_settled") is False:
         problems.append("the specimen was still moving when the loading started (its "
                         "relaxation did not settle within relax.max_steps)")
+        failed.append("start_settled")
+    remedies = list(dict.fromkeys(f"{name}: {QUASI_STATIC_REMEDIES.get(name, GENERIC_REMEDY)}"
+                                  for name in failed))
     return {"ok": not problems, "values": values, "limits": dict(limits),
-            "problems": problems}
+            "problems": problems, "remedies": remedies}
+
+
+GENERIC_REMEDY = "lower speed_fraction, or check the specimen holds together"
+#: what to change when a quasi-static measure fails (scene-file fields of the test table)
+QUASI_STATIC_REMEDIES = {
+    "max_kinetic_to_strain_energy": "inertia: lower speed_fraction",
+    "max_kinetic_to_external_work": "inertia: lower speed_fraction",
+    "mean_inertial_to_punch_force": "inertia: lower speed_fraction",
+    "damping_share": "the drag takes the work: raise damping_time_s (less drag), or "
+                     "lower speed_fraction",
+    "energy_balance_error": "the energy does not balance (time step or contact): lower "
+                            "time_step.factor, or raise the contact stiffness_factor; a "
+                            "lower speed_fraction does not cure it",
+    "start_settled": "the specimen was not at rest when the loading started: raise "
+                     "relax.max_steps (or lower relax.kinetic_ratio); a lower speed_fraction "
+                     "does not cure it",
+}
 
 
 def relative_change(a, b) -> float | None:
