@@ -87,6 +87,7 @@ def test_malformed_coupon_tables_are_one_line_errors(tmp_path, capsys, no_lammps
     (("[tension]", "[tenson]"), "[tenson] is not a table fabmd reads"),
     (("expansion = {", "expanson = {"), "[crimp] has no key 'expanson'"),
     (('coupon = { cells = [3, 2] }', 'coupon = "big"'), "coupon must be a table"),
+    (("speed_fraction = 2e-4", "speed_fraction = 2e-4\nrelax = 5"), "relax must be a table"),
 ])
 def test_build_refuses_misspelt_test_tables(tmp_path, capsys, change, words):
     path = scene_file(tmp_path, TINY.replace(*change))
