@@ -269,6 +269,26 @@ def test_remedies_name_the_failed_measure():
             assert "does not cure it" in remedies[0]
 
 
+def test_a_start_up_spike_is_caught_with_its_own_remedy():
+    import numpy as np
+
+    from fabmd.protocols.driven import quasi_static_verdict, start_spike_ratio
+
+    ramp = np.linspace(0.0, 2.0, 201)  # a settled start: force grows with the elongation
+    assert start_spike_ratio(ramp) == pytest.approx(ramp[10] / ramp[-1])  # 1st 5 % of 200
+    assert start_spike_ratio(ramp ** 3) < 0.01 and start_spike_ratio(ramp[:3]) is None
+    # the shape measured on a tension with a 1000x stiffer warp: 3.77 N at the first
+    # sample, then about 3 mN for the rest of the test
+    spike = np.full(201, 3e-3)
+    spike[0], spike[1] = 0.0, 3.77
+    ratio = start_spike_ratio(spike)
+    assert ratio == pytest.approx(3.77 / 3e-3)
+    verdict = quasi_static_verdict({"start_settled": True, "start_spike_ratio": ratio})
+    assert not verdict["ok"] and verdict["remedies"][0].startswith("start_spike_ratio:")
+    assert "relax.force_ratio" in verdict["remedies"][0]
+    assert "speed_fraction does not cure it" in verdict["remedies"][0]
+
+
 # ---- 6. slurm.sh ------------------------------------------------------------------------
 def test_every_run_folder_has_a_slurm_script(tmp_path):
     from fabmd.protocols.common import slurm_ranks, write_run_folder
