@@ -289,6 +289,36 @@ def test_a_start_up_spike_is_caught_with_its_own_remedy():
     assert "speed_fraction does not cure it" in verdict["remedies"][0]
 
 
+def test_lammps_errors_that_name_a_step_keep_it():
+    from fabmd.engine.diagnosis import to_exception
+
+    exc = to_exception("ERROR: Bond atoms 9 10 missing on proc 0 at step 2 (ntopo_bond_all.cpp)",
+                       None)
+    assert isinstance(exc, UnstableRun) and exc.cause == "lost_atoms" and exc.step == 2
+    assert "at step 2" in str(exc)
+
+
+@pytest.mark.lammps
+@pytest.mark.parametrize("factor", [1.5, 3.0])
+def test_a_time_step_blow_up_is_caught_by_fabmd_with_its_step(tmp_path, factor):
+    """Time steps 6 and 12 x fabmd's default (above the stable one; only benchmarks may
+    ask for them): fabmd's bond guard (every 2 steps) stops the run, before LAMMPS loses
+    bond atoms (it did at step 5 with the guard every 20 steps)."""
+    from fabmd.model.beads import TimeStep
+    from fabmd.protocols.crimp import Crimp
+
+    from .fabrics import plain_weave_cell
+
+    crimp = Crimp(expansion={"warp": -0.1, "weft": -0.1},
+                  time_step=TimeStep(factor=factor, check=False))
+    with pytest.raises(UnstableRun) as err:
+        crimp.run(plain_weave_cell(), tmp_path / "c", engine=Engine(progress=False))
+    record = json.loads((tmp_path / "c" / "failure.json").read_text())
+    assert err.value.cause == record["cause"] == "bond_stretch", record
+    assert record["step"] == err.value.step and 0 < record["step"] < 20
+    assert "time_step.factor" in str(err.value)
+
+
 # ---- 6. slurm.sh ------------------------------------------------------------------------
 def test_every_run_folder_has_a_slurm_script(tmp_path):
     from fabmd.protocols.common import slurm_ranks, write_run_folder
