@@ -184,6 +184,9 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
     from .errors import NotQuasiStatic, RunInterrupted
     from .preflight import check_scene, check_test, plan_test
 
+    if redo and not resume:
+        raise InputError("--redo goes with --resume (run a finished run's test again); "
+                         "to start a run over, use --overwrite")
     check_test(scene, test, plan_test(scene, test))
     check_scene(scene)
     out = Path(out).resolve()

@@ -376,6 +376,24 @@ def test_resume_of_a_finished_run_refuses_unless_redo(finished):
 
 
 @pytest.mark.lammps
+def test_redo_runs_the_test_again_on_the_same_crimp_and_coupon(finished, tmp_path):
+    import shutil
+
+    scene, out = finished
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    stages = {k: v for k, v in digest(copy).items() if k.startswith(("crimp/", "coupon/"))}
+    old_curve = (copy / "tension" / "curve.csv").read_bytes()
+    (copy / "tension" / "curve.csv").write_text("stale\n")  # the redo must replace this
+    summary = run_test(scene, "tension", copy, engine=Engine(progress=False), resume=True,
+                       redo=True)
+    assert (copy / "tension" / "curve.csv").read_bytes() == old_curve  # same state, same run
+    assert {k: v for k, v in digest(copy).items() if k in stages} == stages
+    assert summary["results"] == str(copy.resolve() / "tension")
+    assert not folder.sibling(copy, folder.PARTIAL).exists()
+
+
+@pytest.mark.lammps
 @pytest.mark.slow
 def test_strict_fails_a_tension_pulled_far_too_fast(finished, tmp_path, capsys):
     scene, out = finished
