@@ -319,6 +319,23 @@ def test_a_time_step_blow_up_is_caught_by_fabmd_with_its_step(tmp_path, factor):
     assert "time_step.factor" in str(err.value)
 
 
+@pytest.mark.lammps
+def test_the_crimp_verdict_is_its_stop_condition(tmp_path):
+    """quasi-static is whether the settle condition fired, not the last history line."""
+    from fabmd.protocols.crimp import Crimp
+    from fabmd.scene.quasi_static import QuasiStatic, relaxation_settled
+
+    from .fabrics import plain_weave_cell
+
+    unreachable = QuasiStatic(kinetic_ratio=1e-15, force_ratio=1e-15, max_steps=2000)
+    for name, criterion, fired in (("default", QuasiStatic(), True),
+                                   ("unreachable", unreachable, False)):
+        crimp = Crimp(expansion={"warp": -0.1, "weft": -0.1}, quasi_static=criterion)
+        result = crimp.run(plain_weave_cell(), tmp_path / name, engine=Engine(progress=False))
+        assert relaxation_settled(result.run_dir / "log.lammps") is fired
+        assert result.summary["quasi_static"] is fired
+
+
 # ---- 6. slurm.sh ------------------------------------------------------------------------
 def test_every_run_folder_has_a_slurm_script(tmp_path):
     from fabmd.protocols.common import slurm_ranks, write_run_folder

@@ -39,7 +39,7 @@ from ..results.preview import preview_png
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
-from ..scene.quasi_static import Damping, QuasiStatic
+from ..scene.quasi_static import Damping, QuasiStatic, relaxation_settled
 from ..scene.templates import fmt, render
 from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
 
@@ -268,8 +268,15 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     crimped.info = dict(crimped.info, crimp={"expansion": crimp.expansion})
     crimped.save(run_dir, stem=CRIMPED)
     qs = crimp.quasi_static
-    settled = bool(raw["ke_ratio"][-1] < qs.kinetic_ratio
-                   and raw["force_ratio"][-1] < qs.force_ratio)
+    # the verdict is the stop condition's own (it fired in the log); the last history line
+    # may sample a step just before or after the check and disagree with it
+    logs = [run_dir / name for name in ("log.lammps", "log.resume.lammps")
+            if (run_dir / name).is_file()]
+    if logs:
+        settled = any(relaxation_settled(log) for log in logs)
+    else:
+        settled = bool(raw["ke_ratio"][-1] < qs.kinetic_ratio
+                       and raw["force_ratio"][-1] < qs.force_ratio)
     steps = int(raw["step"][-1])
     history = {"step": raw["step"], "kinetic_energy_j": raw["kinetic_j"],
                "strain_energy_j": raw["strain_energy_j"],
