@@ -192,6 +192,20 @@ def _drape(protocol, coupon, sec, fail, fabric) -> None:
                    f"+ die_clearance_m {_mm(protocol.die_clearance_m)}) needs a blank at least "
                    f"{_mm(need)} wide; set [{sec}.coupon] length_m and width_m >= {_mm(need)} or a "
                    f"smaller punch_radius_m")
+    _drape_clearance(protocol, sec, fail, fabric)
+
+
+def _drape_clearance(protocol, sec, fail, fabric) -> None:
+    # the fabric must pass between the punch and the die edge at full depth (Drape.blank);
+    # the gap shrinks as the fabric thickens, so judging with a thickness no fabric is
+    # thinner than (one yarn's height) refuses only what the later check refuses too
+    thin = min(spec.height_m for spec in fabric.specs().values())
+    r, depth = protocol.punch_radius_m, protocol.depth_m
+    gap = math.hypot(protocol.die_radius_m, thin + r - depth) - r
+    if gap < thin:
+        raise fail(f"[{sec}] at depth_m = {_mm(depth)} the punch passes {_mm(gap)} from the "
+                   f"die edge, less than one yarn's height ({_mm(thin)}): raise "
+                   f"die_clearance_m (now {_mm(protocol.die_clearance_m)}) or lower depth_m")
 
 
 _CHECKS = {"tension": _tension, "bias-extension": _bias_extension,

@@ -124,6 +124,8 @@ coupon = { length_m = "30 mm", width_m = "30 mm" }"""
     ("picture-frame", with_table("picture_frame", PICTURE_FRAME),
      "needs a square coupon"),
     ("drape", with_table("drape", DRAPE), "needs a blank at least"),
+    ("drape", with_table("drape", DRAPE.replace('"30 mm"', '"60 mm"')
+                         + '\ndie_clearance_m = "0.01 mm"'), "raise die_clearance_m"),
     ("tension", TINY.replace("coupon = { cells = [3, 2] }",
                              'coupon = { length_m = "500 mm", width_m = "1 mm" }'),
      "500:1"),
