@@ -12,6 +12,13 @@ prints its message as one line. The subclasses say where it came from:
 * :class:`UnstableRun` — the run was stopped by fabmd's stability guard; names
   the likely cause and the remedy.
 * :class:`OutputExists` — a results folder would be overwritten.
+* :class:`NotQuasiStatic` — under ``--strict``, a test whose curve is not quasi-static.
+* :class:`RunInterrupted` — a run stopped by a signal after writing its checkpoint.
+
+Each class carries the exit status of the ``fabmd`` command as ``exit_code``
+(:data:`EXIT_CODES`): 0 ok, 1 unexpected internal error (a bug), 2 input or usage
+error, 3 simulation failed or unstable, 4 not quasi-static under ``--strict``,
+5 interrupted (checkpoint written).
 
 Warnings (Python ``warnings``, not errors): :class:`OverlapWarning` — beads of
 different fibres (or a bead and a tool) overlapped more than the contact model's
@@ -22,13 +29,27 @@ from __future__ import annotations
 
 from pathlib import Path
 
+#: exit status of the ``fabmd`` command -> what it means (README, ``fabmd --help``)
+EXIT_CODES = {
+    0: "ok",
+    1: "unexpected internal error (a bug: please report it with --traceback)",
+    2: "input or usage error (nothing was run)",
+    3: "simulation failed or went unstable",
+    4: "not quasi-static, under --strict",
+    5: "interrupted (a checkpoint was written; continue with --resume)",
+}
+
 
 class FabmdError(Exception):
     """Base class of every error fabmd raises on purpose."""
 
+    exit_code = 2
+
 
 class InputError(FabmdError, ValueError):
     """A parameter or description is not valid (raised before LAMMPS starts)."""
+
+    exit_code = 2
 
 
 class EngineUnavailable(FabmdError, RuntimeError):
@@ -46,6 +67,8 @@ class SimulationFailed(FabmdError, RuntimeError):
         run_dir: the run folder (input, log and partial outputs are kept there).
         lammps_error: the LAMMPS ``ERROR: ...`` line.
     """
+
+    exit_code = 3
 
     def __init__(self, message: str, run_dir: Path | None = None, lammps_error: str = ""):
         self.run_dir = Path(run_dir) if run_dir is not None else None
@@ -68,6 +91,19 @@ class UnstableRun(SimulationFailed):
         self.cause = cause
         self.step = step
         super().__init__(message, run_dir=run_dir, lammps_error=lammps_error)
+
+
+class NotQuasiStatic(FabmdError):
+    """Under ``--strict``: the test ran, but its curve is not quasi-static (the summary's
+    ``quasi_static`` names the measures that failed)."""
+
+    exit_code = 4
+
+
+class RunInterrupted(FabmdError):
+    """A run was stopped by a signal (SIGTERM, SIGINT) after writing a checkpoint."""
+
+    exit_code = 5
 
 
 class OverlapWarning(UserWarning):

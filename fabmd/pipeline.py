@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,7 +26,17 @@ from .errors import InputError
 from .model.bead_model import BeadModel
 from .protocols.coupon import Coupon, CouponResult, load_coupon
 from .protocols.crimp import Crimp, CrimpResult, load_crimped
-from .results.folder import prepare_run_folder, write_json
+from .results.folder import (
+    MARKER,
+    PARTIAL,
+    abandon_run,
+    begin_run,
+    finish_run,
+    is_finished,
+    prepare_run_folder,
+    sibling,
+    write_json,
+)
 from .scenefile import Scene
 from .settings import build
 
@@ -87,14 +98,35 @@ def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
     """Crimp the scene's fabric (``form="fabric"``) or its periodic unit cell (``"cell"``)."""
     if form not in ("fabric", "cell"):
         raise InputError(f"crimp form must be 'fabric' or 'cell', got {form!r}")
+    from .errors import RunInterrupted
+    from .preflight import check_scene
+
+    check_scene(scene)  # every stage table, before the crimp starts
     loose = scene.model() if form == "fabric" else periodic_cell(scene)
-    return crimp_stage(scene).run(loose, out, engine=engine, overwrite=overwrite)
+    if out is None:
+        return crimp_stage(scene).run(loose, out, engine=engine, overwrite=overwrite)
+    # an existing crimp is replaced only when the new one succeeded
+    work = begin_run(out, overwrite=overwrite, prefix="crimp")
+    try:
+        result = crimp_stage(scene).run(loose, work, engine=engine)
+    except (RunInterrupted, KeyboardInterrupt):
+        raise
+    except BaseException as exc:
+        abandon_run(out, work, exc)
+        raise
+    summary = finish_run(out, work, result.summary)
+    return dataclasses.replace(result, run_dir=Path(out).resolve(), summary=summary)
 
 
 def coupon_stage(scene: Scene, test: str) -> tuple[Coupon, str]:
     """The coupon of a test from ``[<test>.coupon]`` and its source (``cell``/``fabric``)."""
     kind = TESTS[test]
-    table = dict(scene.protocols.get(section(test), {}).get("coupon", {}))
+    table = scene.protocols.get(section(test), {}).get("coupon", {})
+    if not isinstance(table, dict):
+        raise InputError(f"[{section(test)}] coupon must be a table, e.g. coupon = "
+                         f"{{ length_m = \"120 mm\", width_m = \"50 mm\" }} or coupon = "
+                         f"{{ cells = [4, 2] }}, got {table!r}")
+    table = dict(table)
     source = table.pop("source", "cell")
     if source not in ("cell", "fabric"):
         raise InputError(f"[{section(test)}.coupon] source must be 'cell' or 'fabric', "
@@ -102,9 +134,11 @@ def coupon_stage(scene: Scene, test: str) -> tuple[Coupon, str]:
     cells = table.pop("cells", None)
     if cells is not None:
         cell = scene.fabric.unit_cell_m
-        if not (isinstance(cells, list | tuple) and len(cells) == 2):
-            raise InputError(f"[{section(test)}.coupon] cells must be [along x, along y], "
-                             f"got {cells!r}")
+        if not (isinstance(cells, list | tuple) and len(cells) == 2
+                and all(isinstance(n, int) and not isinstance(n, bool) and n > 0
+                        for n in cells)):
+            raise InputError(f"[{section(test)}.coupon] cells must be two whole numbers > 0 "
+                             f"[along x, along y], got {cells!r}")
         table.setdefault("length_m", cells[0] * cell[0])
         table.setdefault("width_m", cells[1] * cell[1])
     defaults = dict(kind.coupon or {})
@@ -129,13 +163,76 @@ def protocol_stage(scene: Scene, test: str):
 
 def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
              overwrite: bool = False, check_rate: bool = False, resume: bool = False,
-             crimped: Path | None = None) -> dict:
+             crimped: Path | None = None, strict: bool = False, redo: bool = False) -> dict:
     """Run the whole pipeline for one test; returns the combined summary.
+
+    Every check the scene decides runs first (:mod:`fabmd.preflight`): a bad scene
+    starts no LAMMPS and writes no folder. A run that replaces an existing ``out``
+    (``overwrite``) writes into ``<out>.partial`` and replaces ``out`` only when it
+    succeeded; a failed one leaves ``out`` as it was and its attempt, with
+    ``failure.json``, in ``<out>.failed`` (see :mod:`fabmd.results.folder`).
 
     Args:
         crimped: a finished crimp folder to start from (skips the crimp stage).
-        resume: continue an interrupted run in ``out`` (finished stages are kept).
+        resume: continue an interrupted run in ``out`` (finished stages are kept); a
+            finished run is refused unless ``redo``.
+        strict: a test whose curve is not quasi-static fails
+            (:class:`~fabmd.errors.NotQuasiStatic`, exit status 4).
+        redo: with ``resume``, run a finished run's test stage again on its crimp and
+            coupon (the old test is replaced only when the new one succeeds).
     """
+    from .errors import NotQuasiStatic, RunInterrupted
+    from .preflight import check_scene, check_test, plan_test
+
+    if redo and not resume:
+        raise InputError("--redo goes with --resume (run a finished run's test again); "
+                         "to start a run over, use --overwrite")
+    check_test(scene, test, plan_test(scene, test))
+    check_scene(scene)
+    out = Path(out).resolve()
+    partial = sibling(out, PARTIAL)
+    if resume and (partial / MARKER).exists():
+        work = partial  # an interrupted replacement: continue it, then put it in place
+    elif resume and is_finished(out):
+        if not redo:
+            raise InputError(f"{out} holds a finished run (summary.json); --resume would "
+                             f"rerun it: pass --redo to run its test again on its crimp "
+                             f"and coupon, or choose another --out")
+        work = begin_run(out, overwrite=True, prefix=test)
+        if mpi.is_root():
+            for stage in ("crimp", "coupon"):
+                if (out / stage).is_dir():
+                    shutil.copytree(out / stage, work / stage)
+        mpi.barrier()
+    elif resume:
+        work = out
+    else:
+        work = begin_run(out, overwrite=overwrite, prefix=test)
+    try:
+        summary = _run_stages(scene, test, work, engine=engine, overwrite=False,
+                              check_rate=check_rate, resume=resume,
+                              crimped=crimped)
+        verdict = summary["test_summary"].get("quasi_static")
+        if strict and isinstance(verdict, dict) and not verdict.get("ok", True):
+            raise NotQuasiStatic(
+                f"{test} is not quasi-static under --strict: "
+                f"{'; '.join(verdict.get('problems', []))}")
+    except (RunInterrupted, KeyboardInterrupt):
+        raise  # the checkpoint stays where it is, for --resume
+    except BaseException as exc:
+        record = abandon_run(out, work, exc)
+        if isinstance(exc, NotQuasiStatic):
+            kept = "; the old results are unchanged" if work != out else ""
+            raise NotQuasiStatic(f"{exc} (results and failure.json in {record}{kept})") \
+                from None
+        raise
+    return finish_run(out, work, summary)
+
+
+def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None,
+                overwrite: bool = False, check_rate: bool = False, resume: bool = False,
+                crimped: Path | None = None) -> dict:
+    """The stages of :func:`run_test` in the folder ``out``."""
     engine = engine or Engine()
     protocol = protocol_stage(scene, test)  # validate everything before LAMMPS starts
     coupon, source = coupon_stage(scene, test) if TESTS[test].coupon is not None else \

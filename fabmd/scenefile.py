@@ -274,6 +274,12 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
             if required not in kwargs:
                 raise InputError(f"{where}: [yarns.{fam}] needs {required}")
         specs[fam] = _build(where, f"yarns.{fam}", YarnSpec, **kwargs)
+    used = {table.get("material") for table in yarn_tables.values() if isinstance(table, dict)}
+    for name in _section(data, "materials", where):
+        if name not in used:  # a misspelt table: the yarn would take a built-in instead
+            raise InputError(f"{where}: [materials.{name}] is not used by any yarn (they use "
+                             f"{', '.join(sorted(str(u) for u in used))}); check the spelling "
+                             f"of the table or of the yarns' material")
     for fam in ("warp", "weft"):
         if fam not in specs:
             raise InputError(f"{where}: [yarns.{fam}] is missing")

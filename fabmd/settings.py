@@ -66,6 +66,9 @@ def build(cls: type, table: dict | None, section: str, **defaults: Any):
         if key not in fields:
             raise InputError(f"[{section}] has no key {key!r} (allowed: {', '.join(fields)})")
         nested = _dataclass_of(hints.get(key))
+        if nested is not None and not isinstance(value, dict | nested | None):
+            raise InputError(f"[{section}] {key} must be a table ([{section}.{key}] or "
+                             f"{key} = {{ ... }}), got {value!r}")
         if nested is not None and isinstance(value, dict):
             # keys the sub-table leaves out keep the protocol's own default (e.g. the
             # trajectory frames a test writes), not the nested class's

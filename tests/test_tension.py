@@ -81,7 +81,7 @@ def test_clamps_that_leave_no_gauge_are_refused():
 def test_a_blow_up_keeps_the_frames_up_to_it(tmp_path, monkeypatch):
     """A driven test that fails still converts its trajectory (salvage), for a look."""
     coupon = parallel_fibres(n=2)
-    test = Tension(max_elongation_pct=1.2, trajectory=TrajectoryOutput(every_steps=5))
+    test = Tension(max_elongation_pct=1.2, trajectory=TrajectoryOutput(every_steps=1))
     runaway = coupon.bond_type_table[0].rest_length_m / test.time_step_s(coupon)  # m/s
     original = Tension.input_text
     # a kick far beyond the speed guard, for the test only (after the relaxation)

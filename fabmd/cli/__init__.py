@@ -36,12 +36,16 @@ def _chosen(argv: list[str]) -> str | None:
 
 
 def build_parser(argv: list[str]) -> argparse.ArgumentParser:
+    from ..errors import EXIT_CODES
+
     parser = argparse.ArgumentParser(
         prog="fabmd",
         description="fabmd — virtual testing lab for dry textile reinforcements "
-                    "(virtual fibres in LAMMPS). SI units unless stated.")
+                    "(virtual fibres in LAMMPS). SI units unless stated.",
+        epilog="exit status: " + "; ".join(f"{k} {v}" for k, v in EXIT_CODES.items()))
     parser.add_argument("--traceback", action="store_true",
                         help="show the full traceback on errors")
+    parser.add_argument("--version", action="version", version=f"fabmd {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     chosen = _chosen(argv)
     for name, (module, help_text) in COMMANDS.items():
@@ -49,6 +53,17 @@ def build_parser(argv: list[str]) -> argparse.ArgumentParser:
         if name == chosen:
             importlib.import_module(f"fabmd.cli.{module}").add_arguments(p)
     return parser
+
+
+def version() -> str:
+    """The installed package's version (its metadata)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as metadata_version
+
+    try:
+        return metadata_version("fabmd")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown (not installed)"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -71,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.traceback:
             raise
         print(f"fabmd: error: {exc}", file=sys.stderr)
-        return 2
+        return getattr(exc, "exit_code", 2)
     except KeyboardInterrupt:
         print("fabmd: interrupted", file=sys.stderr)
         return 130

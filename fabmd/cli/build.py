@@ -30,14 +30,31 @@ def build(scene, out: Path, overwrite: bool = False) -> dict:
     import time
 
     from ..engine import mpi
-    from ..results.folder import prepare_run_folder, write_json
+    from ..preflight import check_scene
+    from ..results.folder import abandon_run, begin_run, finish_run
+
+    t0 = time.perf_counter()
+    check_scene(scene)  # the stage tables too: a typo in [tension] fails here, not later
+    model = scene.model()  # validates and checks overlaps before any folder is made
+    t_build = time.perf_counter() - t0
+    run_dir = begin_run(out, overwrite=overwrite, prefix="build")
+    try:
+        summary = _write(scene, model, run_dir, t_build)
+    except BaseException as exc:
+        abandon_run(out, run_dir, exc)
+        raise
+    return mpi.bcast_json(finish_run(out, run_dir, summary))
+
+
+def _write(scene, model, run_dir: Path, t_build: float) -> dict:
+    """The build folder's files (rank 0); returns the summary."""
+    import time
+
+    from ..engine import mpi
+    from ..results.folder import write_json
     from ..results.preview import preview_png
     from ..results.vtu import write_fibres_vtu, write_yarns_vtu
 
-    t0 = time.perf_counter()
-    model = scene.model()  # validates and checks overlaps before any folder is made
-    t_build = time.perf_counter() - t0
-    run_dir = prepare_run_folder(out, overwrite=overwrite, prefix="build")
     summary = {}
     if mpi.is_root():
         t1 = time.perf_counter()
@@ -51,7 +68,7 @@ def build(scene, out: Path, overwrite: bool = False) -> dict:
                        run_dir=str(run_dir))
         write_json(run_dir / "summary.json", summary)
     mpi.barrier()
-    return mpi.bcast_json(summary)
+    return summary
 
 
 def summarise(model, scene) -> dict:

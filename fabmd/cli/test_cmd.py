@@ -21,6 +21,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="write a checkpoint every STEPS steps (in-process back end)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run in --out from its last checkpoint")
+    p.add_argument("--redo", action="store_true",
+                   help="with --resume on a finished run: run its test again on its crimp "
+                        "and coupon (the old test is replaced only if the new one succeeds)")
+    p.add_argument("--strict", action="store_true",
+                   help="a curve that is not quasi-static is a failure (exit status 4)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_preset_options(p)
     add_run_options(p, out_required=True)
@@ -33,7 +38,8 @@ def run(args) -> int:
     scene = scene_from(args)
     engine = dataclasses.replace(engine_from(args), checkpoint_every=args.checkpoint_every)
     summary = run_test(scene, args.name, args.out, engine=engine, overwrite=args.overwrite,
-                       check_rate=args.check_rate, resume=args.resume, crimped=args.crimped)
+                       check_rate=args.check_rate, resume=args.resume, crimped=args.crimped,
+                       strict=args.strict, redo=args.redo)
     emit(summary, args.json, summary_text(args.name, scene.source, summary))
     return 0
 

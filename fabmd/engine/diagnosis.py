@@ -39,6 +39,7 @@ _RUNAWAY = ("too many neighbor bins", "out of range atoms", "neighbor list overf
             "bond/angle/dihedral extent > half of periodic box length")
 
 _HALT = re.compile(r"fix-id guard_(\w+) met on step (\d+)")
+_STEP = re.compile(r"\b(?:at|on) step (\d+)")
 _ERROR = re.compile(r"ERROR(?: on proc \d+)?: (.*)")
 
 
@@ -62,10 +63,13 @@ def to_exception(text: str, run_dir: Path | None) -> SimulationFailed:
                            f"fix: {remedy}", run_dir=run_dir, lammps_error=line, cause=cause,
                            step=step)
     lowered = line.lower()
+    at = _STEP.search(line)
+    step = int(at.group(1)) if at else None
     if "lost atoms" in lowered or "bond atoms" in lowered and "missing" in lowered:
         what, remedy = CAUSES["lost_atoms"]
-        return UnstableRun(f"unstable run: {what}. Likely cause and fix: {remedy}",
-                           run_dir=run_dir, lammps_error=line, cause="lost_atoms")
+        where = f" at step {step}" if step is not None else ""
+        return UnstableRun(f"unstable run{where}: {what}. Likely cause and fix: {remedy}",
+                           run_dir=run_dir, lammps_error=line, cause="lost_atoms", step=step)
     if any(m in lowered for m in _RUNAWAY):
         what, remedy = CAUSES["runaway_atom"]
         return UnstableRun(f"unstable run: {what}. Likely cause and fix: {remedy}",

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..engine import Engine, EngineResult, mpi
+from ..engine.library import REQUIRED_PACKAGES
 from ..engine.run_script import run_sh_text
 from ..errors import OverlapWarning
 from ..model.bead_model import BeadModel
@@ -80,8 +81,51 @@ def write_run_folder(out: Path | None, protocol: str, model: BeadModel, input_te
         (run_dir / name).write_text(input_text)
         write_json(run_dir / "scene.json", scene)
         (run_dir / "run.sh").write_text(run_sh_text(name))
+        write_slurm_script(run_dir, name, model.n_beads)
     mpi.barrier()  # every rank reads the input that rank 0 wrote
     return run_dir
+
+
+#: beads per MPI rank a Slurm script asks for (LAMMPS scales well down to a few thousand)
+BEADS_PER_RANK = 5000
+SLURM_SCRIPT = "slurm.sh"
+
+
+def slurm_ranks(n_beads: int, beads_per_rank: int = BEADS_PER_RANK) -> int:
+    """MPI ranks for a model of ``n_beads`` beads: one per ``beads_per_rank``, 1 to 64."""
+    return max(1, min(64, n_beads // beads_per_rank))
+
+
+def write_slurm_script(run_dir: Path, input_name_: str, n_beads: int,
+                       hours: float = 12.0) -> Path:
+    """``slurm.sh`` beside ``run.sh``: the same LAMMPS command as a Slurm batch job.
+
+    Ranks from the model's size (:func:`slurm_ranks`), a wall time of ``hours``; both
+    are ``#SBATCH`` lines to edit. Submit from the run folder (``sbatch slurm.sh``);
+    ``LMP`` names the cluster's LAMMPS (default ``lmp``), ``MPIRUN`` its launcher
+    (default ``srun``; e.g. ``MPIRUN="mpirun -np $SLURM_NTASKS"``).
+    """
+    ranks = slurm_ranks(n_beads)
+    minutes = int(round(hours * 60))
+    lines = [
+        "#!/bin/bash",
+        "# Slurm batch job: this folder with plain LAMMPS (the command of run.sh).",
+        "#   cd THIS_FOLDER && sbatch slurm.sh",
+        f"# Ranks: one per {BEADS_PER_RANK} beads ({n_beads} here). Edit the lines below",
+        "# (partition, account, time) for your cluster. It needs a LAMMPS with the packages",
+        f"# {' '.join(REQUIRED_PACKAGES)} (e.g. module load lammps).",
+        f"#SBATCH --job-name=fabmd-{Path(input_name_).suffix.lstrip('.') or 'run'}",
+        f"#SBATCH --ntasks={ranks}",
+        "#SBATCH --cpus-per-task=1",
+        f"#SBATCH --time={minutes // 60:02d}:{minutes % 60:02d}:00",
+        "#SBATCH --output=slurm-%j.out",
+        'cd "${SLURM_SUBMIT_DIR:-$(dirname "$0")}"',
+        'export OMP_NUM_THREADS="${SLURM_CPUS_PER_TASK:-1}"',
+        f'exec ${{MPIRUN:-srun}} "${{LMP:-lmp}}" -in {input_name_} -log log.lammps',
+    ]
+    path = Path(run_dir) / SLURM_SCRIPT
+    path.write_text("\n".join(lines) + "\n")
+    return path
 
 
 def resume_folder(out: Path | None) -> Path:

@@ -57,7 +57,7 @@ from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict,
 #: closing error (work that went somewhere no term accounts for)
 QUASI_STATIC_LIMITS = {"max_kinetic_to_strain_energy": 0.1,
                        "max_kinetic_to_external_work": 0.1, "damping_share": 0.5,
-                       "energy_balance_error": 0.05}
+                       "energy_balance_error": 0.05, "start_spike_ratio": 1.0}
 
 
 @dataclass
@@ -246,6 +246,9 @@ class DrivenTest:
                                   trajectory=trajectory.name if trajectory else None)
             if getattr(self, "relax", None) is not None and not resume:  # starts relaxing
                 result.summary["start_settled"] = relaxation_settled(run_dir / "log.lammps")
+            spike = start_spike_ratio(result.curve.get(self.rate_curve[1]))
+            if spike is not None:
+                result.summary["start_spike_ratio"] = spike
             verdict = quasi_static_verdict(result.summary, self.quasi_static_limits)
             result.summary["quasi_static"] = verdict
             if not verdict["ok"]:
@@ -254,8 +257,8 @@ class DrivenTest:
                     spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"]])
                 warnings.warn(f"{self.protocol} in {run_dir}: not quasi-static "
                               f"({'; '.join(verdict['problems'])}): do not use the curve; "
-                              f"lower speed_fraction (inertia, drag) or check the specimen "
-                              f"holds together", QuasiStaticWarning, stacklevel=2)
+                              f"{'; '.join(verdict['remedies'])}", QuasiStaticWarning,
+                              stacklevel=2)
         if check_rate:
             slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
             other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
@@ -304,11 +307,53 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
               for name in limits}
     problems = [f"{name} = {v:.2g} > {limits[name]:g}" for name, v in values.items()
                 if v is not None and v > limits[name]]
+    failed = [name for name, v in values.items() if v is not None and v > limits[name]]
     if summary.get("start_settled") is False:
         problems.append("the specimen was still moving when the loading started (its "
                         "relaxation did not settle within relax.max_steps)")
+        failed.append("start_settled")
+    remedies = list(dict.fromkeys(f"{name}: {QUASI_STATIC_REMEDIES.get(name, GENERIC_REMEDY)}"
+                                  for name in failed))
     return {"ok": not problems, "values": values, "limits": dict(limits),
-            "problems": problems}
+            "problems": problems, "remedies": remedies}
+
+
+GENERIC_REMEDY = "lower speed_fraction, or check the specimen holds together"
+#: what to change when a quasi-static measure fails (scene-file fields of the test table)
+QUASI_STATIC_REMEDIES = {
+    "max_kinetic_to_strain_energy": "inertia: lower speed_fraction",
+    "max_kinetic_to_external_work": "inertia: lower speed_fraction",
+    "mean_inertial_to_punch_force": "inertia: lower speed_fraction",
+    "damping_share": "the drag takes the work: raise damping_time_s (less drag), or "
+                     "lower speed_fraction",
+    "energy_balance_error": "the energy does not balance (time step or contact): lower "
+                            "time_step.factor, or raise the contact stiffness_factor; a "
+                            "lower speed_fraction does not cure it",
+    "start_spike_ratio": "the force jumps when the loading starts, before the clamps have "
+                         "moved (strain energy stored in the start state is released; a "
+                         "fibre far stiffer than the rest makes this likely): relax the start "
+                         "state further (lower relax.force_ratio and relax.kinetic_ratio, "
+                         "raise relax.max_steps); a lower speed_fraction does not cure it",
+    "start_settled": "the specimen was not at rest when the loading started: raise "
+                     "relax.max_steps (or lower relax.kinetic_ratio); a lower speed_fraction "
+                     "does not cure it",
+}
+
+
+def start_spike_ratio(force, fraction: float = 0.05) -> float | None:
+    """Largest |force| in the first ``fraction`` of the samples (the first excluded: it is
+    printed before any force) over the largest after them; above 1 the force jumps when
+    the loading starts, before the clamps have moved: the start state was not in
+    equilibrium. None for curves too short to tell."""
+    if force is None:
+        return None
+    f = np.abs(np.asarray(force, float))
+    head = max(2, int(round(fraction * len(f))) + 1)
+    if len(f) < head + 2:
+        return None
+    later = float(f[head:].max())
+    early = float(f[1:head].max())
+    return early / max(later, 1e-300) if early > 0 else 0.0
 
 
 def relative_change(a, b) -> float | None:

@@ -5,6 +5,12 @@ log, the data file, ``curve.csv``, ``summary.json`` and plots. It is marked by a
 ``.fabmd-run`` file; ``overwrite=True`` replaces only folders that carry the
 mark (or are empty), so a typo can never wipe an unrelated folder.
 
+Nothing is lost: :func:`begin_run` / :func:`finish_run` / :func:`abandon_run` make a run
+that replaces an existing folder write into the sibling ``<folder>.partial`` and swap it
+in only when it succeeded; a failure leaves the old folder as it was and keeps the failed
+attempt, with ``failure.json``, in ``<folder>.failed`` (an interrupted one stays in
+``<folder>.partial`` for ``--resume``).
+
 Under ``mpirun`` rank 0 decides and creates; the path or the error reaches
 every rank, so all ranks act alike.
 """
@@ -29,7 +35,7 @@ def _prepare_on_root(path: Path | None, overwrite: bool, prefix: str) -> Path:
     if path is None:
         return Path(tempfile.mkdtemp(prefix=f"fabmd-{prefix}-"))
     path = Path(path).resolve()
-    if path.exists() and (not path.is_dir() or any(path.iterdir())):
+    if path.exists() and (not path.is_dir() or not _only_marker(path)):
         if not overwrite:
             raise OutputExists(f"results folder {path} exists already; choose another --out "
                                f"or pass --overwrite (overwrite=True) to replace it")
@@ -39,6 +45,11 @@ def _prepare_on_root(path: Path | None, overwrite: bool, prefix: str) -> Path:
         shutil.rmtree(path)
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def _only_marker(path: Path) -> bool:
+    """Empty, or holding only the mark (a folder :func:`begin_run` made for this run)."""
+    return all(p.name == MARKER for p in path.iterdir())
 
 
 def prepare_run_folder(path: Path | None, overwrite: bool = False,
@@ -127,3 +138,122 @@ def read_ave_time(path: Path) -> dict[str, np.ndarray]:
     rows = [line.split() for line in lines if line.strip() and not line.startswith("#")]
     data = _unique_steps(names, np.array(rows, dtype=float).reshape(-1, len(names)))
     return {n: data[:, i] for i, n in enumerate(names)}
+
+
+# -- replacing a folder only when the new run succeeded ----------------------------------
+PARTIAL = ".partial"
+FAILED = ".failed"
+
+
+def sibling(path: Path, suffix: str) -> Path:
+    """``<path><suffix>`` beside ``path`` (``runs/t`` -> ``runs/t.partial``)."""
+    path = Path(path).resolve()
+    return path.with_name(path.name + suffix)
+
+
+def is_finished(path: Path) -> bool:
+    """A pipeline folder whose last stage finished: it holds its ``summary.json``."""
+    return (Path(path) / MARKER).exists() and (Path(path) / "summary.json").exists()
+
+
+def _remove_ours(path: Path) -> None:
+    """Remove a folder fabmd made (marked); refuse anything else."""
+    if not path.exists():
+        return
+    if not path.is_dir() or not (path / MARKER).exists():
+        raise OutputExists(f"{path} is in the way and is not a fabmd folder (no {MARKER}); "
+                           f"move it away")
+    shutil.rmtree(path)
+
+
+def _begin_on_root(path: Path, overwrite: bool, prefix: str) -> Path:
+    if not path.exists() or (path.is_dir() and _only_marker(path)):
+        return _prepare_on_root(path, False, prefix)
+    if not overwrite:
+        raise OutputExists(f"results folder {path} exists already; choose another --out "
+                           f"or pass --overwrite (overwrite=True) to replace it")
+    if not path.is_dir() or not (path / MARKER).exists():
+        raise OutputExists(f"{path} exists and is not a fabmd results folder (no {MARKER}); "
+                           f"fabmd will not delete it even with --overwrite")
+    work = sibling(path, PARTIAL)
+    _remove_ours(work)  # a stale attempt of an earlier replacement
+    work.mkdir(parents=True)
+    return work
+
+
+def begin_run(path: Path, overwrite: bool = False, prefix: str = "run") -> Path:
+    """The folder a run that may replace ``path`` writes into (marked).
+
+    ``path`` itself when nothing is there; ``<path>.partial`` when ``path`` holds a
+    fabmd folder and ``overwrite`` is True (the old folder stays until
+    :func:`finish_run`).
+
+    Raises:
+        OutputExists: ``path`` exists and ``overwrite`` is False, or it is not a
+            fabmd folder.
+    """
+    message = ""
+    if mpi.is_root():
+        try:
+            work = _begin_on_root(Path(path).resolve(), overwrite, prefix)
+            (work / MARKER).write_text("fabmd run folder\n")
+            message = "OK:" + str(work)
+        except OutputExists as exc:
+            message = "ERR:" + str(exc)
+    message = mpi.bcast_text(message)
+    if message.startswith("ERR:"):
+        raise OutputExists(message[4:])
+    return Path(message[3:])
+
+
+def _retarget(obj, old: str, new: str):
+    """``obj`` (JSON-like) with the path prefix ``old`` of every string made ``new``."""
+    if isinstance(obj, str):
+        return new + obj[len(old):] if obj.startswith(old) else obj
+    if isinstance(obj, dict):
+        return {k: _retarget(v, old, new) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return type(obj)(_retarget(v, old, new) for v in obj)
+    return obj
+
+
+def finish_run(path: Path, work: Path, summary=None):
+    """Put a successful run in ``work`` in place at ``path`` (no-op when they are one).
+
+    The old folder is removed only after the new one is complete; paths inside the
+    run's JSON files (and in ``summary``, returned) are made to point at ``path``.
+    """
+    path, work = Path(path).resolve(), Path(work).resolve()
+    if work == path:
+        return summary
+    if mpi.is_root():
+        for f in work.rglob("*.json"):
+            text = f.read_text()
+            if str(work) in text:
+                f.write_text(text.replace(str(work), str(path)))
+        old = sibling(path, ".old")
+        _remove_ours(old)
+        path.rename(old)
+        work.rename(path)
+        shutil.rmtree(old)
+    mpi.barrier()
+    return _retarget(summary, str(work), str(path))
+
+
+def abandon_run(path: Path, work: Path, error: BaseException) -> Path:
+    """Record a failed run: ``failure.json`` in its folder; the attempt of a replacement
+    moves to ``<path>.failed`` (replacing an older one) and ``path`` stays as it was.
+    Returns the folder that holds the failure record."""
+    path, work = Path(path).resolve(), Path(work).resolve()
+    where = work
+    if mpi.is_root() and work.exists():
+        if work != path:
+            where = sibling(path, FAILED)
+            _remove_ours(where)
+            work.rename(where)
+        record = {"error": str(error), "kind": type(error).__name__,
+                  "exit_code": getattr(error, "exit_code", 1),
+                  "kept": str(path) if where != path else None}
+        write_json(where / "failure.json", record)
+    mpi.barrier()
+    return sibling(path, FAILED) if work != path else path

@@ -17,6 +17,9 @@ SKIN_FRACTION = 0.2
 SPEED_FRACTION = 0.1
 #: a bond longer than this multiple of the longest rest length is running away
 BOND_RUNAWAY = 1.5
+#: steps between bond-stretch checks: fix halt's own ``bondmax`` is cheap, and a time-step
+#: blow-up must be stopped within a few steps, before LAMMPS loses bond atoms
+BOND_GUARD_EVERY = 2
 #: the file the overlap monitor writes into the run folder
 OVERLAP_FILE = "overlap.dat"
 #: overlap/d that stops a run with tool contact only (no ContactModel to say)
@@ -80,7 +83,7 @@ def guards(model: BeadModel, time_step_s: float, every: int = 20,
     if model.n_bonds:
         longest = max(bt.rest_length_m for bt in model.bond_type_table)
         bond_guard = render("bond_guard", bond_limit=BOND_RUNAWAY * longest
-                            * max_rest_length_scale, every=every)
+                            * max_rest_length_scale, every=BOND_GUARD_EVERY)
     else:
         bond_guard = "# no bonds: no bond-stretch guard"
     return render("guards", speed_fraction=SPEED_FRACTION, speed_limit=speed_limit,
