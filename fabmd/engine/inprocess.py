@@ -2,10 +2,17 @@
 
 The input file in the run folder is the one the standalone back end runs; here
 its commands are sent one by one, and each plain ``run N`` is split into chunks
-(``run n start S stop S+N pre no post no``) so that fabmd can show progress.
-``start``/``stop`` keep ``ramp()`` and time-dependent variables exactly as in an
-unsplit run. Under ``mpirun`` every rank does the same; LAMMPS writes files on
-rank 0 only.
+(``run n start S stop S+N pre yes post no``) so that fabmd can show progress,
+call its monitors and stop at a boundary. ``start``/``stop`` keep ``ramp()`` and
+time-dependent variables exactly as in an unsplit run. Every chunk is set up anew
+(``pre yes``: atoms sorted, neighbour lists and contact lists rebuilt, forces
+recomputed), as a run resumed from a checkpoint is: so an interrupted and resumed
+run repeats the uninterrupted one (to round-off grown by friction, see the README),
+whether it was interrupted or not; the set-up costs about one time step per chunk.
+
+SIGTERM and SIGINT (:mod:`fabmd.engine.interrupt`) write a checkpoint at the next
+chunk boundary and raise :class:`fabmd.errors.RunInterrupted`. Under ``mpirun``
+every rank does the same; LAMMPS writes files on rank 0 only.
 """
 
 from __future__ import annotations
@@ -16,7 +23,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from . import mpi
+from ..errors import RunInterrupted
+from . import interrupt, mpi
 from .checkpoint import RESTART, CheckpointState, cut_outputs, join_dump_parts, resume_commands
 from .diagnosis import to_exception
 from .library import new_instance
@@ -74,7 +82,7 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
         args += ["-sf", "omp", "-pk", "omp", str(threads)]
     done = 0
     first = 0
-    with _working_dir(run_dir):
+    with _working_dir(run_dir), interrupt.catching():
         lmp = new_instance(args)
 
         def send(command: str) -> None:
@@ -104,15 +112,13 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                     start, sent = state.run_start, state.step - state.run_start
                 else:
                     start, sent = lmp.extract_global("ntimestep"), 0
-                first_chunk = True
                 size = monitor_every if monitor is not None and monitor_every else \
                     chunk_size(steps)
+                halted = False
                 while sent < steps:
                     n = min(size, steps - sent)
-                    pre = "yes" if first_chunk else "no"
                     post = "yes" if sent + n == steps else "no"
-                    send(f"run {n} start {start} stop {start + steps} pre {pre} post {post}")
-                    first_chunk = False
+                    send(f"run {n} start {start} stop {start + steps} pre yes post {post}")
                     sent += n
                     reached = lmp.extract_global("ntimestep") - start
                     if reached < sent:
@@ -120,18 +126,34 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                         # quasi-static criterion was met): skip the rest, as lmp would
                         total -= steps - reached
                         done += n - (sent - reached)
-                        break
-                    done += n
-                    if monitor is not None:
+                        halted = True
+                    else:
+                        done += n
+                    if monitor is not None and not halted:
                         monitor(lmp)
+                    if progress is not None and mpi.is_root():
+                        progress(done, total)
+                    if interrupt.stop_requested():
+                        # a finished (or halted) run is not continued: the next command is
+                        # where the resumed input picks up
+                        finished = halted or sent >= steps
+                        _write_checkpoint(lmp, run_dir, input_name,
+                                          index + 1 if finished else index,
+                                          lmp.extract_global("ntimestep") if finished
+                                          else start, 0 if finished else steps, done, monitor)
+                        raise RunInterrupted(
+                            f"stopped by {interrupt.signal_name()} at step "
+                            f"{int(lmp.extract_global('ntimestep'))}: checkpoint written in "
+                            f"{run_dir}; run the same command with --resume (resume=True) "
+                            f"to continue", run_dir=run_dir,
+                            step=int(lmp.extract_global("ntimestep")))
+                    if halted:
+                        break
                     if checkpoint_every and done - last_checkpoint >= checkpoint_every \
                             and sent < steps:
                         _write_checkpoint(lmp, run_dir, input_name, index, start, steps,
                                           done, monitor)
                         last_checkpoint = done
-                        first_chunk = True  # write_restart re-initialises: set up again
-                    if progress is not None and mpi.is_root():
-                        progress(done, total)
                 if progress is not None and mpi.is_root():
                     progress(done, total)
         finally:

@@ -41,7 +41,14 @@ from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import fmt, render
-from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
+from .common import (
+    DATA_FILE,
+    overlap_summary,
+    resume_folder,
+    run_folder,
+    scene_dict,
+    write_run_folder,
+)
 
 PROTOCOL = "crimp"
 CRIMPED = "crimped"
@@ -193,17 +200,23 @@ class Crimp:
 
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False) -> CrimpResult:
-        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures."""
+            overwrite: bool = False, resume: bool = False) -> CrimpResult:
+        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures.
+
+        ``resume``: continue the interrupted crimp in ``out`` from its checkpoint.
+        """
         engine = engine or Engine()
         model = with_room_in_z(model)
         text = self.input_text(model)  # validates before anything is written
-        run_dir = write_run_folder(out, PROTOCOL, model, text,
-                                   {"crimp": scene_dict(self), "model": model.metadata()},
-                                   overwrite=overwrite)
+        if resume:
+            run_dir = resume_folder(out)
+        else:
+            run_dir = write_run_folder(out, PROTOCOL, model, text,
+                                       {"crimp": scene_dict(self), "model": model.metadata()},
+                                       overwrite=overwrite)
         paraview = self.trajectory.paraview
         try:
-            run = run_folder(engine, run_dir, PROTOCOL)
+            run = run_folder(engine, run_dir, PROTOCOL, resume=resume)
         except SimulationFailed:
             salvage(run_dir, paraview=paraview, model=model)  # the frames up to the failure
             raise
