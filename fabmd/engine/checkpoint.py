@@ -59,6 +59,8 @@ class CheckpointState:
     step: int
     done: int
     monitor: dict | None = None
+    #: IDs of the contact-history fixes (their pair instance numbers must match on resume)
+    history_fixes: list[str] | None = None
 
     def save(self, run_dir: Path) -> None:
         path = Path(run_dir) / STATE

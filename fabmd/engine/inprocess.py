@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import os
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -27,6 +28,7 @@ from ..errors import RunInterrupted
 from . import interrupt, mpi
 from .checkpoint import RESTART, CheckpointState, cut_outputs, join_dump_parts, resume_commands
 from .diagnosis import to_exception
+from .history import align_pair_instances, history_fixes, pair_instance
 from .library import new_instance
 from .script import logical_lines, plain_run_steps, total_run_steps
 
@@ -83,6 +85,10 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
     done = 0
     first = 0
     with _working_dir(run_dir), interrupt.catching():
+        if state is not None:
+            _align_history(state)
+        else:
+            align_pair_instances()  # so that a resume can give its pair this one's number
         lmp = new_instance(args)
 
         def send(command: str) -> None:
@@ -163,6 +169,17 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
     return done
 
 
+def _align_history(state: CheckpointState) -> None:
+    """Give the resumed pair style the instance number whose contact history the restart
+    file holds (:mod:`fabmd.engine.history`); warn where that is impossible."""
+    numbers = [n for n in map(pair_instance, state.history_fixes or []) if n is not None]
+    if len(numbers) == 1 and not align_pair_instances(numbers[0]):
+        warnings.warn("resuming in the process that ran before: the contact history "
+                      "(tangential springs) starts afresh; resume in a new process "
+                      "(e.g. fabmd ... --resume) for an exact continuation", UserWarning,
+                      stacklevel=3)
+
+
 def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: int,
                       steps: int, done: int, monitor) -> None:
     """write_restart to a temporary name, then the state file: never a half checkpoint."""
@@ -171,7 +188,8 @@ def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: in
     if mpi.is_root():
         os.replace(Path(run_dir) / f"{RESTART}.tmp", Path(run_dir) / RESTART)
         state = CheckpointState(input_name, index, int(start), int(steps), step, int(done),
-                                monitor.state() if hasattr(monitor, "state") else None)
+                                monitor.state() if hasattr(monitor, "state") else None,
+                                history_fixes(lmp))
         state.save(run_dir)
     mpi.barrier()
 
