@@ -10,9 +10,9 @@ sticking contact would restart with an unloaded tangential spring.
 Before ``read_restart`` the in-process engine therefore raises the counter to
 the checkpoint's number by creating throw-away pair styles in a scratch LAMMPS
 instance (:func:`align_pair_instances`; every run reads the counter that way first, so
-no run's pair is instance 0 and a new process can always catch up). A counter already past it (a resume in
-the same Python process after more runs) cannot go back: the resume then warns
-that the contact history starts afresh.
+no run's pair is instance 0 and a new process can always catch up). A counter
+already past it (a resume in the same Python process after more runs) cannot go
+back: the resume then warns that the contact history starts afresh.
 """
 
 from __future__ import annotations

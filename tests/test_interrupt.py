@@ -1,0 +1,114 @@
+"""SIGTERM / SIGINT stop a run at a chunk boundary with a checkpoint; --resume continues
+whichever stage was interrupted and repeats the uninterrupted run exactly."""
+
+import os
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from fabmd.engine import Engine
+from fabmd.errors import RunInterrupted
+from fabmd.pipeline import run_test
+from fabmd.results.folder import read_csv
+
+from .conftest import fabmd_command, run_cli
+from .test_pipeline import TINY
+
+pytestmark = pytest.mark.lammps
+
+
+def tiny(tmp_path):
+    import tomllib
+
+    from fabmd.scenefile import parse_scene
+
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    return path, parse_scene(tomllib.loads(TINY), source=str(path))
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """The tiny pipeline run through, as the command line runs it (a few seconds)."""
+    root = tmp_path_factory.mktemp("whole")
+    path, _ = tiny(root)
+    out = run_cli("test", "tension", str(path), "--out", str(root / "run"), "--quiet")
+    assert out.returncode == 0, out.stderr
+    return root / "run"
+
+
+class SignalAt:
+    """A progress display that sends this process a real signal once stage ``label`` has
+    done ``fraction`` of its steps (at a chunk boundary: which chunk is then certain)."""
+
+    def __init__(self, label: str, fraction: float, signum=signal.SIGTERM):
+        self.label, self.fraction, self.signum = label, fraction, signum
+        self.sent = False
+
+    def __call__(self, label: str):
+        def progress(done: int, total: int) -> None:
+            if label == self.label and not self.sent and done >= self.fraction * total:
+                self.sent = True
+                os.kill(os.getpid(), self.signum)
+        return progress
+
+
+def assert_same_result(resumed, whole):
+    """The resumed pipeline's test curve equals the uninterrupted one to 1e-6 of the peak
+    force (measured: 0, bit for bit), and the crimped states agree."""
+    a, b = read_csv(whole / "tension" / "curve.csv"), read_csv(resumed / "tension" / "curve.csv")
+    assert len(a["force_n"]) == len(b["force_n"]) > 10
+    np.testing.assert_array_equal(b["elongation_pct"], a["elongation_pct"])
+    peak = np.abs(a["force_n"]).max()
+    assert peak > 0
+    assert np.abs(b["force_n"] - a["force_n"]).max() <= 1e-6 * peak
+    assert (resumed / "crimp" / "crimped.data").read_text().split("Atoms")[1] == \
+        (whole / "crimp" / "crimped.data").read_text().split("Atoms")[1]
+
+
+@pytest.mark.parametrize("stage,fraction", [("crimp", 0.3), ("tension", 0.5)])
+def test_sigterm_then_resume_equals_uninterrupted(tmp_path, monkeypatch, uninterrupted,
+                                                  stage, fraction):
+    path, scene = tiny(tmp_path)
+    monkeypatch.setattr("fabmd.engine.runner.Progress", SignalAt(stage, fraction))
+    out = tmp_path / "run"
+    with pytest.raises(RunInterrupted, match="--resume") as caught:
+        run_test(scene, "tension", out, engine=Engine(progress=True))
+    assert caught.value.exit_code == 5
+    assert caught.value.run_dir == (out / stage).resolve()
+    assert (out / stage / "checkpoint.json").exists()
+    assert not (out / stage / "summary.json").exists()  # the stage did not finish
+    if stage == "crimp":
+        assert not (out / "tension").exists()
+    # a new process resumes (as after a pre-empted job): it continues the interrupted stage
+    resumed = run_cli("test", "tension", str(path), "--out", str(out), "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert "Unused restart file" not in (out / stage / "log.resume.lammps").read_text()
+    assert_same_result(out, uninterrupted)
+
+
+def test_sigterm_to_the_command_exits_5_and_names_the_way_on(tmp_path, uninterrupted):
+    """A real scheduler's SIGTERM to ``fabmd test``: exit code 5, a one-line message that
+    names the folder and --resume; --resume then finishes with the same result."""
+    import subprocess
+
+    from .conftest import clean_env
+
+    path, _ = tiny(tmp_path)
+    out = tmp_path / "run"
+    proc = subprocess.Popen(fabmd_command() + ["test", "tension", str(path), "--out", str(out),
+                                               "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=clean_env())
+    deadline = time.time() + 120
+    while not (out / "crimp" / "in.crimp").exists() and time.time() < deadline:
+        time.sleep(0.02)  # the handler is in place once a stage folder is written
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 5, err
+    assert "--resume" in err and str(out) in err and "SIGTERM" in err
+    resumed = run_cli("test", "tension", str(path), "--out", str(out), "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert_same_result(out, uninterrupted)
