@@ -36,12 +36,15 @@ def test_resume_equals_uninterrupted_run(tmp_path, woven_coupon):
     with pytest.raises(KeyboardInterrupt):
         test.run(coupon, tmp_path / "cut", engine=engine, monitor=Interrupt(after=25))
     assert has_checkpoint(tmp_path / "cut")
-    resumed = test.run(coupon, tmp_path / "cut", engine=engine, resume=True)
+    # resumed in this process, its pair style cannot get the interrupted one's number back:
+    # the contact history starts afresh, with a warning (a new process restores it exactly,
+    # tests/test_interrupt.py)
+    with pytest.warns(UserWarning, match="contact history"):
+        resumed = test.run(coupon, tmp_path / "cut", engine=engine, resume=True)
     a, b = whole.curve, resumed.curve
     assert len(a["force_n"]) == len(b["force_n"])
     np.testing.assert_allclose(b["elongation_pct"], a["elongation_pct"], rtol=1e-9)
-    # equal to round-off: a restarted run rebuilds its neighbour lists, which reorders
-    # force sums, and frictional contacts let such differences grow a little
+    # close: only the contact history restarted (the chunks are set up anew in both runs)
     np.testing.assert_allclose(b["force_n"], a["force_n"], rtol=1e-5,
                                atol=1e-6 * np.abs(a["force_n"]).max())
     eb_whole, eb_resumed = whole.summary["energy_balance"], resumed.summary["energy_balance"]
