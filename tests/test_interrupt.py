@@ -112,3 +112,53 @@ def test_sigterm_to_the_command_exits_5_and_names_the_way_on(tmp_path, uninterru
     resumed = run_cli("test", "tension", str(path), "--out", str(out), "--resume", "--quiet")
     assert resumed.returncode == 0, resumed.stderr
     assert_same_result(out, uninterrupted)
+
+
+DRIVER = """
+import os, signal, sys
+import fabmd.engine.runner as runner
+from fabmd.cli import main
+
+class SignalAt:  # a progress display (rank 0 only) that SIGTERMs its own rank, once
+    def __init__(self, label):
+        self.label, self.sent = label, False
+        self.done = 0
+    def __call__(self, done, total):
+        if self.label == "tension" and not self.sent and done >= 0.5 * total:
+            self.sent = True
+            os.kill(os.getpid(), signal.SIGTERM)
+
+runner.Progress = SignalAt
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_sigterm_to_rank_0_only_stops_every_rank_and_resumes_under_mpi(tmp_path, mpirun):
+    """Under mpirun a launcher may signal rank 0 only: the ranks agree at the chunk
+    boundary, all stop with exit code 5 (no hang), and a 2-rank --resume equals the
+    uninterrupted 2-rank run."""
+    import subprocess
+    import sys
+
+    from .conftest import clean_env
+
+    path, _ = tiny(tmp_path)
+    driver = tmp_path / "driver.py"
+    driver.write_text(DRIVER)
+    args = ["test", "tension", str(path)]
+
+    def mpi_run(*cmd, timeout=300):
+        return subprocess.run([str(mpirun), "-np", "2", *cmd], capture_output=True,
+                              text=True, env=clean_env(), timeout=timeout)
+
+    whole = mpi_run(*fabmd_command(), *args, "--out", str(tmp_path / "whole"), "--quiet")
+    assert whole.returncode == 0, whole.stderr
+    cut = mpi_run(sys.executable, str(driver), *args, "--out", str(tmp_path / "cut"))
+    assert cut.returncode == 5, cut.stderr
+    assert "SIGTERM" in cut.stderr and (tmp_path / "cut" / "tension" / "checkpoint.json").exists()
+    resumed = mpi_run(*fabmd_command(), *args, "--out", str(tmp_path / "cut"), "--resume",
+                      "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert_same_result(tmp_path / "cut", tmp_path / "whole")
