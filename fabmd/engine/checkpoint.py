@@ -1,10 +1,12 @@
 """Checkpoints of in-process runs, and the script that resumes from one.
 
-Every ``every_steps`` steps (at a chunk boundary) the in-process engine writes
-``checkpoint.restart`` (LAMMPS ``write_restart``: atoms, bonds, box, groups,
-time step and clock, and the state of fixes that keep one — clamp origins,
-contact history) and ``checkpoint.json`` (which command of the input was
-running, where its run started, and the Python monitors' samples).
+Every ``every_steps`` steps, and when SIGTERM/SIGINT arrived (at a chunk boundary),
+the in-process engine writes ``checkpoint.restart`` (LAMMPS ``write_restart``: atoms,
+bonds, box, groups, time step and clock, and the state of fixes that keep one — clamp
+origins, contact history) and ``checkpoint.json`` (which command of the input was
+running, where its run started, the Python monitors' samples and the contact-history
+fix IDs, see :mod:`fabmd.engine.history`). A checkpoint written after a run's last
+chunk (or a run a ``fix halt`` ended) points at the command after it.
 
 Resuming replays the input in order with these rules: commands that *define*
 settings (styles, coefficients, variables, computes, fixes, regions, outputs)
