@@ -1,6 +1,7 @@
 """SIGTERM / SIGINT stop a run at a chunk boundary with a checkpoint; --resume continues
 whichever stage was interrupted and repeats the uninterrupted run exactly."""
 
+import json
 import os
 import signal
 import time
@@ -19,14 +20,19 @@ from .test_pipeline import TINY
 pytestmark = pytest.mark.lammps
 
 
+#: the tiny scene with a crimp ramp long enough to span chunks (a stop lands mid-ramp)
+SCENE = TINY.replace("[crimp]\n", "[crimp]\nramp_transits = 100\n")
+
+
 def tiny(tmp_path):
     import tomllib
 
     from fabmd.scenefile import parse_scene
 
+    assert "ramp_transits = 100" in SCENE
     path = tmp_path / "tiny.toml"
-    path.write_text(TINY)
-    return path, parse_scene(tomllib.loads(TINY), source=str(path))
+    path.write_text(SCENE)
+    return path, parse_scene(tomllib.loads(SCENE), source=str(path))
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +74,10 @@ def assert_same_result(resumed, whole):
         (whole / "crimp" / "crimped.data").read_text().split("Atoms")[1]
 
 
-@pytest.mark.parametrize("stage,fraction", [("crimp", 0.3), ("tension", 0.5)])
+# crimp: after the first chunk, in the middle of the ramp; coupon: its relaxation ends in
+# its first chunk, so the stop comes between runs; tension: half way through the loading
+@pytest.mark.parametrize("stage,fraction", [("crimp", 0.0), ("coupon", 0.0),
+                                            ("tension", 0.5)])
 def test_sigterm_then_resume_equals_uninterrupted(tmp_path, monkeypatch, uninterrupted,
                                                   stage, fraction):
     path, scene = tiny(tmp_path)
@@ -80,8 +89,11 @@ def test_sigterm_then_resume_equals_uninterrupted(tmp_path, monkeypatch, uninter
     assert caught.value.run_dir == (out / stage).resolve()
     assert (out / stage / "checkpoint.json").exists()
     assert not (out / stage / "summary.json").exists()  # the stage did not finish
-    if stage == "crimp":
+    if stage != "tension":
         assert not (out / "tension").exists()
+    if stage == "crimp":  # stopped mid-ramp: the resume continues the ramp run
+        state = json.loads((out / "crimp" / "checkpoint.json").read_text())
+        assert 0 < state["step"] - state["run_start"] < state["run_steps"]
     # a new process resumes (as after a pre-empted job): it continues the interrupted stage
     resumed = run_cli("test", "tension", str(path), "--out", str(out), "--resume", "--quiet")
     assert resumed.returncode == 0, resumed.stderr

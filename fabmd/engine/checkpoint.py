@@ -164,6 +164,33 @@ def cut_outputs(run_dir: Path, commands: list[str], step: int) -> None:
             path.write_text("\n".join(keep) + "\n")
 
 
+def drop_repeated_steps(run_dir: Path, commands: list[str]) -> None:
+    """Keep one line per step in the output files of ``commands``: every chunk of a run is
+    set up anew, and a ``fix print`` prints its step again at set-up (the last of equal
+    lines is kept, as :func:`fabmd.results.folder.read_print_file` would)."""
+    for command in commands:
+        for name in output_files(command):
+            path = Path(run_dir) / name
+            if not path.exists():
+                continue
+            lines = path.read_text().splitlines()
+            keep: list[str] = []
+            last_step = None  # the step of the last data line kept
+            for line in lines:
+                words = line.split()
+                step = words[0] if words and not line.startswith("#") else None
+                if step is not None and step == last_step:
+                    keep.pop(next(i for i in range(len(keep) - 1, -1, -1)
+                                  if keep[i].split()[:1] == [step]))
+                keep.append(line)
+                if step is not None:
+                    last_step = step
+            if len(keep) != len(lines):
+                tmp = path.with_name(path.name + ".tmp")
+                tmp.write_text("\n".join(keep) + "\n")
+                os.replace(tmp, path)
+
+
 def join_dump_parts(run_dir: Path, commands: list[str]) -> None:
     """Put the frames written before a resume in front of the resumed run's (binary and
     text dumps alike: their frames are self-contained, so the files just concatenate)."""

@@ -26,7 +26,14 @@ from pathlib import Path
 
 from ..errors import RunInterrupted
 from . import interrupt, mpi
-from .checkpoint import RESTART, CheckpointState, cut_outputs, join_dump_parts, resume_commands
+from .checkpoint import (
+    RESTART,
+    CheckpointState,
+    cut_outputs,
+    drop_repeated_steps,
+    join_dump_parts,
+    resume_commands,
+)
 from .diagnosis import to_exception
 from .history import align_pair_instances, history_fixes, pair_instance
 from .library import new_instance
@@ -162,6 +169,8 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                         last_checkpoint = done
                 if progress is not None and mpi.is_root():
                     progress(done, total)
+            if mpi.is_root():  # a step each chunk's set-up printed again: once
+                drop_repeated_steps(run_dir, commands)
         finally:
             lmp.close()
             if state is not None and mpi.is_root():  # the dump frames from before the resume
