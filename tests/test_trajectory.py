@@ -246,6 +246,15 @@ def test_fibre_tension_result_opens_in_mdanalysis_and_meshio(tmp_path):
     assert steps[0] == 0 and steps[-1] == test.steps  # first and last step are frames
     assert np.all(np.diff(steps) > 0) and len(steps) >= 6
     assert u.trajectory.units["length"] == "m"
+    # stock MDAnalysis, no fabmd code: the run folder's data file as topology (bonds too)
+    import MDAnalysis as mda
+
+    stock = mda.Universe(str(run_dir / "model.data"), str(run_dir / "trajectory.h5"),
+                         format="H5MD", atom_style="id type x y z diameter density resid")
+    assert stock.trajectory.n_frames == len(steps) and len(stock.bonds) == len(u.bonds)
+    stock.trajectory[-1]
+    u.trajectory[-1]
+    np.testing.assert_allclose(stock.atoms.positions * 1e-10, u.atoms.positions, rtol=1e-6)
 
     with open_trajectory(run_dir / "trajectory.h5") as f:
         force = f["observables/bond_force/value"][-1]
