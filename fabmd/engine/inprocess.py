@@ -7,8 +7,8 @@ call its monitors and stop at a boundary. ``start``/``stop`` keep ``ramp()`` and
 time-dependent variables exactly as in an unsplit run. Every chunk is set up anew
 (``pre yes``: atoms sorted, neighbour lists and contact lists rebuilt, forces
 recomputed), as a run resumed from a checkpoint is: so an interrupted and resumed
-run repeats the uninterrupted one (to round-off grown by friction, see the README),
-whether it was interrupted or not; the set-up costs about one time step per chunk.
+run repeats the uninterrupted one bit for bit (with the contact history restored,
+:mod:`fabmd.engine.history`); the set-up costs about one time step per chunk.
 
 SIGTERM and SIGINT (:mod:`fabmd.engine.interrupt`) write a checkpoint at the next
 chunk boundary and raise :class:`fabmd.errors.RunInterrupted`. Under ``mpirun``
