@@ -100,12 +100,6 @@ class NotQuasiStatic(FabmdError):
     exit_code = 4
 
 
-class RunInterrupted(FabmdError):
-    """A run was stopped by a signal (SIGTERM, SIGINT) after writing a checkpoint."""
-
-    exit_code = 5
-
-
 class OverlapWarning(UserWarning):
     """A run saw overlaps above ``ContactModel.overlap_warning`` (results may be too soft)."""
 
@@ -113,3 +107,20 @@ class OverlapWarning(UserWarning):
 class QuasiStaticWarning(UserWarning):
     """A driven test was not quasi-static: inertia or drag carry a large part of its
     force (see the summary's ``quasi_static``); slow it down before using the curve."""
+
+
+class RunInterrupted(FabmdError):
+    """A run was stopped by SIGTERM or SIGINT after writing a checkpoint; ``--resume``
+    (``resume=True``) continues it. The command line exits with :attr:`exit_code`.
+
+    Attributes:
+        run_dir: the folder whose checkpoint was written (None between stages).
+        step: the time step of the checkpoint, where one was written.
+    """
+
+    exit_code = 5
+
+    def __init__(self, message: str, run_dir: Path | None = None, step: int | None = None):
+        self.run_dir = Path(run_dir) if run_dir is not None else None
+        self.step = step
+        super().__init__(message)

@@ -21,8 +21,9 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-from .engine import Engine, mpi
-from .errors import InputError
+from .engine import Engine, interrupt, mpi
+from .engine.checkpoint import has_checkpoint
+from .errors import InputError, RunInterrupted
 from .model.bead_model import BeadModel
 from .protocols.coupon import Coupon, CouponResult, load_coupon
 from .protocols.crimp import Crimp, CrimpResult, load_crimped
@@ -161,6 +162,24 @@ def protocol_stage(scene: Scene, test: str):
     return build_protocol(test, table, contact=scene.contact)
 
 
+def stage_mode(stage_dir: Path, resume: bool) -> str:
+    """What a pipeline stage does with its folder: ``"done"`` (finished, its
+    ``summary.json`` written: keep it), ``"resume"`` (``resume`` and a checkpoint there:
+    continue from it) or ``"run"`` (run it, replacing a partial folder)."""
+    stage_dir = Path(stage_dir)
+    if (stage_dir / "summary.json").exists():
+        return "done"
+    return "resume" if resume and has_checkpoint(stage_dir) else "run"
+
+
+def _stop_between_stages(out: Path, finished: str) -> None:
+    """Honour a stop signal that came after a stage's last chunk (collective)."""
+    if interrupt.stop_requested():
+        raise RunInterrupted(f"stopped by {interrupt.signal_name()} after the {finished} "
+                             f"stage (finished and kept in {out}); run the same command with "
+                             f"--resume to continue", run_dir=Path(out))
+
+
 def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
              overwrite: bool = False, check_rate: bool = False, resume: bool = False,
              crimped: Path | None = None, strict: bool = False, redo: bool = False) -> dict:
@@ -174,12 +193,16 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
 
     Args:
         crimped: a finished crimp folder to start from (skips the crimp stage).
-        resume: continue an interrupted run in ``out`` (finished stages are kept); a
-            finished run is refused unless ``redo``.
+        resume: continue an interrupted run in ``out``: finished stages are kept, the
+            interrupted one continues from its checkpoint (:func:`stage_mode`); a finished
+            run is refused unless ``redo``.
         strict: a test whose curve is not quasi-static fails
             (:class:`~fabmd.errors.NotQuasiStatic`, exit status 4).
         redo: with ``resume``, run a finished run's test stage again on its crimp and
             coupon (the old test is replaced only when the new one succeeds).
+
+    Raises:
+        RunInterrupted: SIGTERM/SIGINT arrived; the stage running wrote a checkpoint.
     """
     from .errors import NotQuasiStatic, RunInterrupted
     from .preflight import check_scene, check_test, plan_test
@@ -247,27 +270,35 @@ def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None
             raise InputError(f"nothing to resume: {out} does not exist")
     else:
         out = prepare_run_folder(out, overwrite=overwrite, prefix=test)
-    # 1. crimp
-    crimp_dir = Path(crimped) if crimped is not None else out / "crimp"
-    if crimped is None and not (crimp_dir / "crimped.data").exists():
-        loose = periodic_cell(scene) if source == "cell" else scene.model()
-        crimp_result: CrimpResult | None = crimp.run(loose, crimp_dir, engine=engine)
-        crimped_model = crimp_result.model
-    else:
-        crimp_result = None
-        crimped_model = load_crimped(crimp_dir)
-    # 2. coupon
-    if coupon is None:
-        specimen = crimped_model
-        coupon_result: CouponResult | None = None
-    elif (out / "coupon" / "coupon.data").exists():
-        specimen, coupon_result = load_coupon(out / "coupon"), None
-    else:
-        coupon_result = coupon.run(crimped_model, out / "coupon", engine=engine)
-        specimen = coupon_result.model
-    # 3. test
-    result = protocol.run(specimen, out / section(test), engine=engine, check_rate=check_rate,
-                          resume=resume and (out / section(test)).exists())
+    with interrupt.catching():  # SIGTERM/SIGINT: checkpoint, RunInterrupted (exit code 5)
+        # 1. crimp
+        crimp_dir = Path(crimped) if crimped is not None else out / "crimp"
+        mode = "done" if crimped is not None else stage_mode(crimp_dir, resume)
+        if mode != "done":
+            loose = periodic_cell(scene) if source == "cell" else scene.model()
+            crimp_result: CrimpResult | None = crimp.run(
+                loose, crimp_dir, engine=engine, overwrite=True, resume=mode == "resume")
+            crimped_model = crimp_result.model
+            _stop_between_stages(out, "crimp")
+        else:
+            crimp_result = None
+            crimped_model = load_crimped(crimp_dir)
+        # 2. coupon
+        coupon_dir = out / "coupon"
+        if coupon is None:
+            specimen = crimped_model
+            coupon_result: CouponResult | None = None
+        elif (mode := stage_mode(coupon_dir, resume)) == "done":
+            specimen, coupon_result = load_coupon(coupon_dir), None
+        else:
+            coupon_result = coupon.run(crimped_model, coupon_dir, engine=engine,
+                                       overwrite=True, resume=mode == "resume")
+            specimen = coupon_result.model
+            _stop_between_stages(out, "coupon")
+        # 3. test
+        test_dir = out / section(test)
+        result = protocol.run(specimen, test_dir, engine=engine, check_rate=check_rate,
+                              overwrite=True, resume=resume and has_checkpoint(test_dir))
     summary = {"test": test, "scene": scene.source, "results": str(out / section(test)),
                "crimp": str(crimp_dir), "coupon_beads": specimen.n_beads,
                "test_summary": result.summary}

@@ -8,6 +8,7 @@ from fabmd.engine import Engine
 from fabmd.engine.checkpoint import has_checkpoint
 from fabmd.errors import InputError
 from fabmd.protocols.tension import Tension
+from fabmd.results.trajectory import read_lengths
 from fabmd.scene.energy import ContactPower
 
 from .fabrics import plain_weave_cell
@@ -36,12 +37,15 @@ def test_resume_equals_uninterrupted_run(tmp_path, woven_coupon):
     with pytest.raises(KeyboardInterrupt):
         test.run(coupon, tmp_path / "cut", engine=engine, monitor=Interrupt(after=25))
     assert has_checkpoint(tmp_path / "cut")
-    resumed = test.run(coupon, tmp_path / "cut", engine=engine, resume=True)
+    # resumed in this process, its pair style cannot get the interrupted one's number back:
+    # the contact history starts afresh, with a warning (a new process restores it exactly,
+    # tests/test_interrupt.py)
+    with pytest.warns(UserWarning, match="contact history"):
+        resumed = test.run(coupon, tmp_path / "cut", engine=engine, resume=True)
     a, b = whole.curve, resumed.curve
     assert len(a["force_n"]) == len(b["force_n"])
     np.testing.assert_allclose(b["elongation_pct"], a["elongation_pct"], rtol=1e-9)
-    # equal to round-off: a restarted run rebuilds its neighbour lists, which reorders
-    # force sums, and frictional contacts let such differences grow a little
+    # close: only the contact history restarted (the chunks are set up anew in both runs)
     np.testing.assert_allclose(b["force_n"], a["force_n"], rtol=1e-5,
                                atol=1e-6 * np.abs(a["force_n"]).max())
     eb_whole, eb_resumed = whole.summary["energy_balance"], resumed.summary["energy_balance"]
@@ -59,8 +63,8 @@ def test_resume_equals_uninterrupted_run(tmp_path, woven_coupon):
         np.testing.assert_array_equal(fr["particles/all/position/step"][()], steps)
         assert len(steps) > 5 and np.all(np.diff(steps) > 0)
         # equal to round-off grown by friction (as the forces above): a thousandth of d
-        np.testing.assert_allclose(fr["particles/all/position/value"][()],
-                                   fw["particles/all/position/value"][()],
+        np.testing.assert_allclose(read_lengths(fr["particles/all/position/value"]),
+                                   read_lengths(fw["particles/all/position/value"]),
                                    atol=1e-3 * float(coupon.diameters.max()))
         forces = fw["observables/bond_force/value"][()]
         np.testing.assert_allclose(fr["observables/bond_force/value"][()], forces,

@@ -23,6 +23,7 @@ from fabmd.results.trajectory import (
     Frame,
     TrajectoryFormatError,
     open_trajectory,
+    read_lengths,
     read_model,
     read_tilt,
     write_snapshot,
@@ -95,15 +96,16 @@ def test_snapshot_is_h5md_and_loads_with_yarns_as_segments(tmp_path):
     path = write_snapshot(model, tmp_path / "sheet.h5", paraview_dir=tmp_path)
     with open_trajectory(path) as f:
         assert list(f["h5md"].attrs["version"]) == [1, 1]
-        assert f.attrs["fabmd_format_version"] == BASE_VERSION  # no tilt: readable by v1
+        assert f.attrs["fabmd_format_version"] == BASE_VERSION == FORMAT_VERSION
         assert "box_tilt" not in f["observables"]
-        assert f["particles/all/position/value"].attrs["unit"] == "m"
+        assert f["particles/all/position/value"].attrs["unit"] == "nm"
         assert f["particles/all/position/value"].compression == "gzip"
         assert list(f["particles/all/box"].attrs["boundary"]) == ["periodic", "periodic",
                                                                   "none"]
         assert f["connectivity/bonds"].shape == (model.n_bonds, 2)
-    back = read_model(path)
-    assert np.array_equal(back.positions, model.unwrapped_positions)
+    back = read_model(path)  # SI again, to an ulp (stored in nm)
+    np.testing.assert_allclose(back.positions, model.unwrapped_positions, rtol=4e-16, atol=0)
+    np.testing.assert_allclose(back.diameters, model.diameters, rtol=4e-16)
     assert [y.name for y in back.yarns] == [y.name for y in model.yarns]
 
     u = fabmd.load(path)
@@ -130,8 +132,8 @@ def test_a_sheared_cell_keeps_its_box_tilt(tmp_path):
     path = tmp_path / "trajectory.h5"
     write_trajectory(path, model, frames)
     with open_trajectory(path) as f:
-        assert f.attrs["fabmd_format_version"] == 2 == FORMAT_VERSION
-        assert f["observables/box_tilt/value"].attrs["unit"] == "m"
+        assert f.attrs["fabmd_format_version"] == FORMAT_VERSION
+        assert f["observables/box_tilt/value"].attrs["unit"] == "nm"
     assert read_tilt(path, 0) == pytest.approx([0, 0, 0])
     assert read_tilt(path) == pytest.approx([xy, 0, 0])
     u = fabmd.load(path)
@@ -140,6 +142,62 @@ def test_a_sheared_cell_keeps_its_box_tilt(tmp_path):
     assert u.dimensions[5] == pytest.approx(np.degrees(np.arctan2(ly, xy)), rel=1e-6)
     frame = A.FabricFrame.from_universe(u)
     assert frame.box_lengths == pytest.approx([lx, ly, lz], rel=1e-6)  # the untilted cell
+
+
+def as_version_2(path, old):
+    """A copy of a version-3 file as fabmd wrote it before the units module (metres)."""
+    shutil.copy(path, old)
+    with h5py.File(old, "a") as f:
+        f.attrs["fabmd_format_version"] = 2
+        for name in ("length_unit", "length_scale_m"):
+            del f.attrs[name]
+        del f["h5md/modules"]
+        for ds in ("particles/all/position/value", "particles/all/box/edges/value",
+                   "particles/all/diameter", "observables/box_offset/value"):
+            f[ds][...] = f[ds][()] * 1e-9
+            f[ds].attrs["unit"] = "m"
+
+
+def test_stock_mdanalysis_reads_the_trajectory(tmp_path):
+    """MDAnalysis's own H5MD reader (no fabmd code) loads the positions: the file declares
+    the units module and stores lengths in nm; fabmd's readers give the same in SI; a
+    version-2 file (metres, before the units module) still reads the same."""
+    import MDAnalysis as mda
+
+    model = woven_sheet(fibres=(3, 2))
+    shifted = model.unwrapped_positions + np.array([0.0, 0.0, 1e-4])
+    frames = [Frame(step=s, time=1e-6 * s, box_lo=model.box_lo, box_hi=model.box_hi,
+                    positions=p) for s, p in ((0, model.unwrapped_positions), (7, shifted))]
+    path = tmp_path / "trajectory.h5"
+    write_trajectory(path, model, frames)
+    with h5py.File(path) as f:
+        assert list(f["h5md/modules/units"].attrs["version"]) == [1, 0]
+        assert f["h5md/author"].attrs["name"] not in ("", "fabmd")  # a person, not the program
+        assert f.attrs["length_scale_m"] == 1e-9
+    stock = mda.Universe.empty(model.n_beads, trajectory=False)
+    stock.load_new(str(path), format="H5MD")  # converts nm to its own unit, the ångström
+    ours = fabmd.load(path)
+    assert stock.trajectory.n_frames == ours.trajectory.n_frames == 2
+    for i, expected in enumerate((model.unwrapped_positions, shifted)):
+        stock.trajectory[i]
+        ours.trajectory[i]
+        # float32 positions in both readers: compare to single precision
+        np.testing.assert_allclose(stock.atoms.positions * 1e-10, expected, rtol=1e-6,
+                                   atol=1e-6 * np.abs(expected).max())
+        np.testing.assert_allclose(ours.atoms.positions, stock.atoms.positions * 1e-10,
+                                   rtol=1e-6, atol=1e-6 * np.abs(expected).max())
+        np.testing.assert_allclose(stock.dimensions[:3] * 1e-10, model.box_hi - model.box_lo,
+                                   rtol=1e-6)
+    old = tmp_path / "v2.h5"
+    as_version_2(path, old)
+    np.testing.assert_allclose(read_model(old).positions, shifted, rtol=1e-15)
+    np.testing.assert_allclose(read_model(old).diameters, model.diameters, rtol=1e-15)
+    frames_old = [fr.positions for fr in A.FabricFrame.iter_trajectory(old)]
+    frames_new = [fr.positions for fr in A.FabricFrame.iter_trajectory(path)]
+    np.testing.assert_allclose(frames_old, frames_new, rtol=1e-15)
+    u_old = fabmd.load(old)
+    u_old.trajectory[1]
+    np.testing.assert_allclose(u_old.atoms.positions, ours.atoms.positions, rtol=1e-6)
 
 
 def test_readers_refuse_unknown_versions_and_formats(tmp_path):
@@ -188,10 +246,19 @@ def test_fibre_tension_result_opens_in_mdanalysis_and_meshio(tmp_path):
     assert steps[0] == 0 and steps[-1] == test.steps  # first and last step are frames
     assert np.all(np.diff(steps) > 0) and len(steps) >= 6
     assert u.trajectory.units["length"] == "m"
+    # stock MDAnalysis, no fabmd code: the run folder's data file as topology (bonds too)
+    import MDAnalysis as mda
+
+    stock = mda.Universe(str(run_dir / "model.data"), str(run_dir / "trajectory.h5"),
+                         format="H5MD", atom_style="id type x y z diameter density resid")
+    assert stock.trajectory.n_frames == len(steps) and len(stock.bonds) == len(u.bonds)
+    stock.trajectory[-1]
+    u.trajectory[-1]
+    np.testing.assert_allclose(stock.atoms.positions * 1e-10, u.atoms.positions, rtol=1e-6)
 
     with open_trajectory(run_dir / "trajectory.h5") as f:
         force = f["observables/bond_force/value"][-1]
-        last = f["particles/all/position/value"][-1]
+        last = read_lengths(f["particles/all/position/value"], -1)
     bt = test.model().bond_type_table[0]
     length = np.linalg.norm(np.diff(last, axis=0), axis=1)  # bond i joins beads i, i+1
     # bond force: tension > 0, in the model's bond order, equal to 2K(r - r0)

@@ -106,7 +106,7 @@ class FabricFrame:
     def iter_trajectory(cls, path: Path) -> Iterator[FabricFrame]:
         """Every frame of a ``trajectory.h5`` (or of a run folder's), in order; the
         identity is read once, then one frame's positions and box at a time."""
-        from ..results.trajectory import open_trajectory, trajectory_path
+        from ..results.trajectory import open_trajectory, read_lengths, trajectory_path
 
         path = trajectory_path(path)
         base = cls.from_trajectory(path, 0)
@@ -117,11 +117,12 @@ class FabricFrame:
             offset = f["observables/box_offset/value"]
             tilt = f["observables"].get("box_tilt")
             for i in range(position["value"].shape[0]):
-                lo = np.asarray(offset[i], float)
+                lo = read_lengths(offset, i)
                 yield dataclasses.replace(
-                    base, positions=position["value"][i], box_lo=lo, box_hi=lo + edges[i],
+                    base, positions=read_lengths(position["value"], i), box_lo=lo,
+                    box_hi=lo + read_lengths(edges, i),
                     time_s=float(position["time"][i]), step=int(position["step"][i]),
-                    tilt=None if tilt is None else tilt["value"][i])
+                    tilt=None if tilt is None else read_lengths(tilt["value"], i))
 
     @classmethod
     def from_universe(cls, u) -> FabricFrame:

@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.traceback:
             raise
         print(f"fabmd: error: {exc}", file=sys.stderr)
-        return getattr(exc, "exit_code", 2)
+        return getattr(exc, "exit_code", 2)  # RunInterrupted: 5
     except KeyboardInterrupt:
         print("fabmd: interrupted", file=sys.stderr)
         return 130

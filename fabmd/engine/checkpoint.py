@@ -1,10 +1,12 @@
 """Checkpoints of in-process runs, and the script that resumes from one.
 
-Every ``every_steps`` steps (at a chunk boundary) the in-process engine writes
-``checkpoint.restart`` (LAMMPS ``write_restart``: atoms, bonds, box, groups,
-time step and clock, and the state of fixes that keep one — clamp origins,
-contact history) and ``checkpoint.json`` (which command of the input was
-running, where its run started, and the Python monitors' samples).
+Every ``every_steps`` steps, and when SIGTERM/SIGINT arrived (at a chunk boundary),
+the in-process engine writes ``checkpoint.restart`` (LAMMPS ``write_restart``: atoms,
+bonds, box, groups, time step and clock, and the state of fixes that keep one — clamp
+origins, contact history) and ``checkpoint.json`` (which command of the input was
+running, where its run started, the Python monitors' samples and the contact-history
+fix IDs, see :mod:`fabmd.engine.history`). A checkpoint written after a run's last
+chunk (or a run a ``fix halt`` ended) points at the command after it.
 
 Resuming replays the input in order with these rules: commands that *define*
 settings (styles, coefficients, variables, computes, fixes, regions, outputs)
@@ -59,6 +61,8 @@ class CheckpointState:
     step: int
     done: int
     monitor: dict | None = None
+    #: IDs of the contact-history fixes (their pair instance numbers must match on resume)
+    history_fixes: list[str] | None = None
 
     def save(self, run_dir: Path) -> None:
         path = Path(run_dir) / STATE
@@ -158,6 +162,33 @@ def cut_outputs(run_dir: Path, commands: list[str], step: int) -> None:
                 except ValueError:
                     keep.append(line)
             path.write_text("\n".join(keep) + "\n")
+
+
+def drop_repeated_steps(run_dir: Path, commands: list[str]) -> None:
+    """Keep one line per step in the output files of ``commands``: every chunk of a run is
+    set up anew, and a ``fix print`` prints its step again at set-up (the last of equal
+    lines is kept, as :func:`fabmd.results.folder.read_print_file` would)."""
+    for command in commands:
+        for name in output_files(command):
+            path = Path(run_dir) / name
+            if not path.exists():
+                continue
+            lines = path.read_text().splitlines()
+            keep: list[str] = []
+            last_step = None  # the step of the last data line kept
+            for line in lines:
+                words = line.split()
+                step = words[0] if words and not line.startswith("#") else None
+                if step is not None and step == last_step:
+                    keep.pop(next(i for i in range(len(keep) - 1, -1, -1)
+                                  if keep[i].split()[:1] == [step]))
+                keep.append(line)
+                if step is not None:
+                    last_step = step
+            if len(keep) != len(lines):
+                tmp = path.with_name(path.name + ".tmp")
+                tmp.write_text("\n".join(keep) + "\n")
+                os.replace(tmp, path)
 
 
 def join_dump_parts(run_dir: Path, commands: list[str]) -> None:

@@ -2,10 +2,17 @@
 
 The input file in the run folder is the one the standalone back end runs; here
 its commands are sent one by one, and each plain ``run N`` is split into chunks
-(``run n start S stop S+N pre no post no``) so that fabmd can show progress.
-``start``/``stop`` keep ``ramp()`` and time-dependent variables exactly as in an
-unsplit run. Under ``mpirun`` every rank does the same; LAMMPS writes files on
-rank 0 only.
+(``run n start S stop S+N pre yes post no``) so that fabmd can show progress,
+call its monitors and stop at a boundary. ``start``/``stop`` keep ``ramp()`` and
+time-dependent variables exactly as in an unsplit run. Every chunk is set up anew
+(``pre yes``: atoms sorted, neighbour lists and contact lists rebuilt, forces
+recomputed), as a run resumed from a checkpoint is: so an interrupted and resumed
+run repeats the uninterrupted one bit for bit (with the contact history restored,
+:mod:`fabmd.engine.history`); the set-up costs about one time step per chunk.
+
+SIGTERM and SIGINT (:mod:`fabmd.engine.interrupt`) write a checkpoint at the next
+chunk boundary and raise :class:`fabmd.errors.RunInterrupted`. Under ``mpirun``
+every rank does the same; LAMMPS writes files on rank 0 only.
 """
 
 from __future__ import annotations
@@ -13,12 +20,22 @@ from __future__ import annotations
 import contextlib
 import os
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
-from . import mpi
-from .checkpoint import RESTART, CheckpointState, cut_outputs, join_dump_parts, resume_commands
+from ..errors import RunInterrupted
+from . import interrupt, mpi
+from .checkpoint import (
+    RESTART,
+    CheckpointState,
+    cut_outputs,
+    drop_repeated_steps,
+    join_dump_parts,
+    resume_commands,
+)
 from .diagnosis import to_exception
+from .history import align_pair_instances, history_fixes, pair_instance
 from .library import new_instance
 from .script import logical_lines, plain_run_steps, total_run_steps
 
@@ -74,7 +91,11 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
         args += ["-sf", "omp", "-pk", "omp", str(threads)]
     done = 0
     first = 0
-    with _working_dir(run_dir):
+    with _working_dir(run_dir), interrupt.catching():
+        if state is not None:
+            _align_history(state)
+        else:
+            align_pair_instances()  # so that a resume can give its pair this one's number
         lmp = new_instance(args)
 
         def send(command: str) -> None:
@@ -104,15 +125,13 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                     start, sent = state.run_start, state.step - state.run_start
                 else:
                     start, sent = lmp.extract_global("ntimestep"), 0
-                first_chunk = True
                 size = monitor_every if monitor is not None and monitor_every else \
                     chunk_size(steps)
+                halted = False
                 while sent < steps:
                     n = min(size, steps - sent)
-                    pre = "yes" if first_chunk else "no"
                     post = "yes" if sent + n == steps else "no"
-                    send(f"run {n} start {start} stop {start + steps} pre {pre} post {post}")
-                    first_chunk = False
+                    send(f"run {n} start {start} stop {start + steps} pre yes post {post}")
                     sent += n
                     reached = lmp.extract_global("ntimestep") - start
                     if reached < sent:
@@ -120,25 +139,54 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                         # quasi-static criterion was met): skip the rest, as lmp would
                         total -= steps - reached
                         done += n - (sent - reached)
-                        break
-                    done += n
-                    if monitor is not None:
+                        halted = True
+                    else:
+                        done += n
+                    if monitor is not None and not halted:
                         monitor(lmp)
+                    if progress is not None and mpi.is_root():
+                        progress(done, total)
+                    if interrupt.stop_requested():
+                        # a finished (or halted) run is not continued: the next command is
+                        # where the resumed input picks up
+                        finished = halted or sent >= steps
+                        _write_checkpoint(lmp, run_dir, input_name,
+                                          index + 1 if finished else index,
+                                          lmp.extract_global("ntimestep") if finished
+                                          else start, 0 if finished else steps, done, monitor)
+                        raise RunInterrupted(
+                            f"stopped by {interrupt.signal_name()} at step "
+                            f"{int(lmp.extract_global('ntimestep'))}: checkpoint written in "
+                            f"{run_dir}; run the same command with --resume (resume=True) "
+                            f"to continue", run_dir=run_dir,
+                            step=int(lmp.extract_global("ntimestep")))
+                    if halted:
+                        break
                     if checkpoint_every and done - last_checkpoint >= checkpoint_every \
                             and sent < steps:
                         _write_checkpoint(lmp, run_dir, input_name, index, start, steps,
                                           done, monitor)
                         last_checkpoint = done
-                        first_chunk = True  # write_restart re-initialises: set up again
-                    if progress is not None and mpi.is_root():
-                        progress(done, total)
                 if progress is not None and mpi.is_root():
                     progress(done, total)
+            if mpi.is_root():  # a step each chunk's set-up printed again: once
+                drop_repeated_steps(run_dir, commands)
         finally:
             lmp.close()
             if state is not None and mpi.is_root():  # the dump frames from before the resume
                 join_dump_parts(run_dir, commands[: state.command_index])
     return done
+
+
+def _align_history(state: CheckpointState) -> None:
+    """Give the resumed pair style the instance number whose contact history the restart
+    file holds (:mod:`fabmd.engine.history`); warn where that is impossible."""
+    numbers = [n for n in map(pair_instance, state.history_fixes or []) if n is not None]
+    if len(numbers) == 1 and not align_pair_instances(numbers[0]):
+        warnings.warn("resuming in the process that ran before: the contact history "
+                      "(tangential springs) starts afresh; resume in a new process "
+                      "(e.g. fabmd ... --resume) for an exact continuation", UserWarning,
+                      stacklevel=3)
 
 
 def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: int,
@@ -149,7 +197,8 @@ def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: in
     if mpi.is_root():
         os.replace(Path(run_dir) / f"{RESTART}.tmp", Path(run_dir) / RESTART)
         state = CheckpointState(input_name, index, int(start), int(steps), step, int(done),
-                                monitor.state() if hasattr(monitor, "state") else None)
+                                monitor.state() if hasattr(monitor, "state") else None,
+                                history_fixes(lmp))
         state.save(run_dir)
     mpi.barrier()
 

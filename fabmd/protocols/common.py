@@ -139,9 +139,11 @@ def resume_folder(out: Path | None) -> Path:
     return Path(out).resolve()
 
 
-def run_folder(engine: Engine, run_dir: Path, protocol: str) -> EngineResult:
-    """Run the protocol's input in ``run_dir`` with ``engine``."""
-    return engine.run(run_dir, input_name(protocol), label=protocol)
+def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = False
+               ) -> EngineResult:
+    """Run the protocol's input in ``run_dir`` with ``engine`` (``resume``: from its
+    checkpoint)."""
+    return engine.run(run_dir, input_name(protocol), label=protocol, resume=resume)
 
 
 def overlap_summary(run_dir: Path, contact_model: ContactModel | None = None,

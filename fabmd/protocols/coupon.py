@@ -32,7 +32,14 @@ from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render
-from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
+from .common import (
+    DATA_FILE,
+    overlap_summary,
+    resume_folder,
+    run_folder,
+    scene_dict,
+    write_run_folder,
+)
 
 PROTOCOL = "coupon"
 COUPON = "coupon"
@@ -156,8 +163,9 @@ class Coupon:
         ])
 
     def run(self, fabric: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False) -> CouponResult:
-        """Cut the coupon from ``fabric``, relax it free and save it in ``out``."""
+            overwrite: bool = False, resume: bool = False) -> CouponResult:
+        """Cut the coupon from ``fabric``, relax it free and save it in ``out``
+        (``resume``: continue the interrupted relaxation in ``out`` from its checkpoint)."""
         geometry = self.geometry(fabric)
         if self.relax is None:
             run_dir = write_run_folder(out, PROTOCOL, geometry, "# not relaxed\n",
@@ -165,13 +173,17 @@ class Coupon:
             geometry = self.with_cohesion(geometry)
             if mpi.is_root():
                 geometry.save(run_dir, stem=COUPON)
+                write_json(Path(run_dir) / "summary.json", {"relaxed": False})  # done mark
             return CouponResult(Path(run_dir), geometry, {"relaxed": False})
         text = self.input_text(geometry)
-        run_dir = write_run_folder(out, PROTOCOL, geometry, text, {"coupon": scene_dict(self)},
-                                   overwrite=overwrite)
+        if resume:
+            run_dir = resume_folder(out)
+        else:
+            run_dir = write_run_folder(out, PROTOCOL, geometry, text,
+                                       {"coupon": scene_dict(self)}, overwrite=overwrite)
         paraview = self.trajectory.paraview
         try:
-            run_folder(engine or Engine(), run_dir, PROTOCOL)
+            run_folder(engine or Engine(), run_dir, PROTOCOL, resume=resume)
         except SimulationFailed:
             salvage(run_dir, paraview=paraview, model=geometry)  # the frames up to the failure
             raise
@@ -184,6 +196,8 @@ class Coupon:
             relaxed = self.with_cohesion(relaxed)
             relaxed.save(run_dir, stem=COUPON)
             settled = relaxation_settled(Path(run_dir) / "log.lammps")
+            if resume and not settled:  # it settled after the resume
+                settled = relaxation_settled(Path(run_dir) / "log.resume.lammps")
             if settled is False:
                 warnings.warn(f"coupon in {run_dir}: the free relaxation did not settle within "
                               f"{self.relax.max_steps} steps, the coupon is still moving: raise "

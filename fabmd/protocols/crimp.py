@@ -45,7 +45,14 @@ from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import fmt, render
-from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
+from .common import (
+    DATA_FILE,
+    overlap_summary,
+    resume_folder,
+    run_folder,
+    scene_dict,
+    write_run_folder,
+)
 
 PROTOCOL = "crimp"
 CRIMPED = "crimped"
@@ -212,11 +219,12 @@ class Crimp:
 
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False) -> CrimpResult:
+            overwrite: bool = False, resume: bool = False) -> CrimpResult:
         """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures.
 
-        A shrink beyond a family's loose crimp is warned about (``UserWarning``) and
-        listed in the summary's ``shrink_warnings``.
+        ``resume``: continue the interrupted crimp in ``out`` from its checkpoint. A shrink
+        beyond a family's loose crimp is warned about (``UserWarning``) and listed in the
+        summary's ``shrink_warnings``.
         """
         engine = engine or Engine()
         shrink = self.shrink_warnings(model)
@@ -225,12 +233,15 @@ class Crimp:
                 warnings.warn(message, UserWarning, stacklevel=2)
         model = with_room_in_z(model)
         text = self.input_text(model)  # validates before anything is written
-        run_dir = write_run_folder(out, PROTOCOL, model, text,
-                                   {"crimp": scene_dict(self), "model": model.metadata()},
-                                   overwrite=overwrite)
+        if resume:
+            run_dir = resume_folder(out)
+        else:
+            run_dir = write_run_folder(out, PROTOCOL, model, text,
+                                       {"crimp": scene_dict(self), "model": model.metadata()},
+                                       overwrite=overwrite)
         paraview = self.trajectory.paraview
         try:
-            run = run_folder(engine, run_dir, PROTOCOL)
+            run = run_folder(engine, run_dir, PROTOCOL, resume=resume)
         except SimulationFailed:
             salvage(run_dir, paraview=paraview, model=model)  # the frames up to the failure
             raise

@@ -102,7 +102,7 @@ class ParaViewSeries:
 
 def export_paraview(trajectory: Path, folder: Path | None = None) -> Path:
     """ParaView series of an existing ``trajectory.h5`` (into its folder by default)."""
-    from .trajectory import Frame, open_trajectory, read_model
+    from .trajectory import Frame, open_trajectory, read_lengths, read_model
 
     trajectory = Path(trajectory)
     folder = Path(folder) if folder is not None else trajectory.parent
@@ -112,11 +112,11 @@ def export_paraview(trajectory: Path, folder: Path | None = None) -> Path:
         part = f["particles/all"]
         obs = f["observables"]
         for i in range(part["position/value"].shape[0]):
-            lo = obs["box_offset/value"][i]
+            lo = read_lengths(obs["box_offset/value"], i)
             series.append(Frame(
                 step=int(part["position/step"][i]), time=float(part["position/time"][i]),
-                box_lo=lo, box_hi=lo + part["box/edges/value"][i],
-                positions=part["position/value"][i],
+                box_lo=lo, box_hi=lo + read_lengths(part["box/edges/value"], i),
+                positions=read_lengths(part["position/value"], i),
                 velocities=part["velocity/value"][i] if "velocity" in part else None,
                 bond_force=obs["bond_force/value"][i] if "bond_force" in obs else None))
     series.close()

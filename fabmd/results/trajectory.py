@@ -7,26 +7,29 @@ after the run :func:`finalise` (rank 0 only) turns them into ``trajectory.h5``
 and the ParaView series ``trajectory.pvd`` + ``paraview/frame_*.vtu``. The
 dumps stay beside them for OVITO.
 
-Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)::
+Layout of ``trajectory.h5`` (H5MD 1.1 with the units module; every value carries a
+``unit``; lengths in nanometres, a unit stock H5MD readers know, everything else SI)::
 
-    /                      attrs fabmd_format="fabmd-trajectory", fabmd_format_version=1
-                           (2 when the file has box_tilt)
-    /h5md                  attrs version=[1, 1]; author/, creator/ (name, version)
+    /                      attrs fabmd_format="fabmd-trajectory", fabmd_format_version=3,
+                           length_unit="nm", length_scale_m=1e-9 (stored length x scale = m)
+    /h5md                  attrs version=[1, 1]; author/ (name: $FABMD_AUTHOR or the
+                           login name; email: $FABMD_AUTHOR_EMAIL if set), creator/ (name,
+                           version), modules/units (attrs version=[1, 0], system="SI")
     /particles/all/
         box/               attrs dimension=3, boundary=["periodic"|"none"] x 3
-            edges/         step [nf], time [nf] s, value [nf, 3] m (box lengths)
-        position/          step, time, value [nf, N, 3] m — unwrapped (fibres never torn
+            edges/         step [nf], time [nf] s, value [nf, 3] nm (box lengths)
+        position/          step, time, value [nf, N, 3] nm — unwrapped (fibres never torn
                            at periodic faces; wrap with the box if needed)
-        velocity/          (optional) value [nf, N, 3] m/s
+        velocity/          (optional) value [nf, N, 3] m s-1
         species [N]        family code = LAMMPS atom type (1-based)
         fibre_id [N]       virtual fibre = LAMMPS molecule id (1-based)
         yarn_id [N]        yarn (1-based)
-        mass [N] kg, diameter [N] m
+        mass [N] kg, diameter [N] nm
     /connectivity/bonds    [nb, 2] 0-based bead indices; attr particles_group
     /observables/
-        box_offset/        step, time, value [nf, 3] m (lower box corner)
-        box_tilt/          (version 2, a triclinic box: a sheared periodic cell) value
-                           [nf, 3] m, the tilt factors xy, xz, yz as LAMMPS has them;
+        box_offset/        step, time, value [nf, 3] nm (lower box corner)
+        box_tilt/          (a triclinic box: a sheared periodic cell) value
+                           [nf, 3] nm, the tilt factors xy, xz, yz as LAMMPS has them;
                            edges are then the lengths lx, ly, lz of the untilted cell
                            (the box vectors are (lx,0,0), (xy,ly,0), (xz,yz,lz))
         bond_force/        (optional) value [nf, nb] N, axial force, > 0 in tension
@@ -34,10 +37,16 @@ Layout of ``trajectory.h5`` (H5MD 1.1; SI units, every value carries a ``unit``)
                            datasets fibre_yarn [n_fibres], bond_type [nb]
 
 Every ``step`` dataset is one dataset hard-linked into each element. Readers
-(:func:`open_trajectory`) refuse files of an unknown format or a newer version; a
-file without a tilted box stays version 1, so that an older fabmd reads it.
-MDAnalysis's own H5MD reader does not know the unit ``m``: open the file with
-:func:`fabmd.load`, whose reader keeps SI values as they are.
+(:func:`open_trajectory`) refuse files of an unknown format or a newer version.
+Versions 1 and 2 (fabmd before the units module) stored lengths in metres (2: with
+``box_tilt``); fabmd reads them all and returns SI (:func:`read_lengths` scales by each
+dataset's ``unit``). Stock MDAnalysis reads version 3 with no fabmd code, given a
+topology, e.g. the run folder's data file::
+
+    mda.Universe("model.data", "trajectory.h5", format="H5MD",
+                 atom_style="id type x y z diameter density resid")   # positions in Å
+
+:func:`fabmd.load` gives the same frames with yarns, fibres and SI units.
 """
 
 from __future__ import annotations
@@ -57,11 +66,19 @@ from ..scene.outputs import BOND_DUMP_FILE, DUMP_FILE
 from .paraview import PARAVIEW_DIR, PVD_FILE  # noqa: F401 - file names of a run folder
 
 FORMAT = "fabmd-trajectory"
-#: the newest format version this fabmd writes and reads (2: box_tilt may be present)
-FORMAT_VERSION = 2
-#: the version of a file without box_tilt
-BASE_VERSION = 1
+#: the format version this fabmd writes, the newest it reads (1: metres; 2: metres, may
+#: have box_tilt; 3: nanometres, units module)
+FORMAT_VERSION = 3
+#: the version of every file this fabmd writes, with or without box_tilt
+BASE_VERSION = FORMAT_VERSION
 H5MD_VERSION = (1, 1)
+#: H5MD units module version
+UNITS_MODULE_VERSION = (1, 0)
+#: the unit lengths are stored in, and its size in metres
+LENGTH_UNIT = "nm"
+LENGTH_SCALE_M = 1e-9
+#: length units fabmd reads: how many make a metre (versions 1 and 2 wrote "m")
+_LENGTH_UNITS_PER_M = {"m": 1.0, "nm": 1e9, "Angstrom": 1e10}
 
 TRAJECTORY_FILE = "trajectory.h5"
 
@@ -106,7 +123,15 @@ class TrajectoryWriter:
         f.attrs["fabmd_format_version"] = BASE_VERSION
         h5md = f.create_group("h5md")
         h5md.attrs["version"] = np.array(H5MD_VERSION, dtype=np.int32)
-        h5md.create_group("author").attrs["name"] = "fabmd"
+        author = h5md.create_group("author")
+        author.attrs["name"], email = file_author()
+        if email:
+            author.attrs["email"] = email
+        units = h5md.create_group("modules/units")
+        units.attrs["version"] = np.array(UNITS_MODULE_VERSION, dtype=np.int32)
+        units.attrs["system"] = "SI"
+        f.attrs["length_unit"] = LENGTH_UNIT
+        f.attrs["length_scale_m"] = LENGTH_SCALE_M
         creator = h5md.create_group("creator")
         creator.attrs["name"] = "fabmd"
         creator.attrs["version"] = __version__
@@ -121,24 +146,27 @@ class TrajectoryWriter:
         box.attrs["dimension"] = np.int32(3)
         box.attrs["boundary"] = np.array(["periodic" if p else "none" for p in model.periodic],
                                          dtype=h5py.string_dtype())
-        self.edges = self._element(box, "edges", (3,), "m", compress=False)
-        self.position = self._element(part, "position", (n, 3), "m")
+        self.edges = self._element(box, "edges", (3,), LENGTH_UNIT, compress=False)
+        self.position = self._element(part, "position", (n, 3), LENGTH_UNIT)
         self.velocity = (self._element(part, "velocity", (n, 3), "m s-1") if velocities
                          else None)
         for name, values, unit in (("species", model.atom_types, None),
                                    ("fibre_id", model.fibre_ids, None),
                                    ("yarn_id", model.yarn_ids, None),
                                    ("mass", model.masses, "kg"),
-                                   ("diameter", model.diameters, "m")):
+                                   ("diameter", model.diameters, LENGTH_UNIT)):
             dtype = np.int32 if unit is None else np.float64
-            d = part.create_dataset(name, data=np.asarray(values, dtype=dtype))
+            values = np.asarray(values, dtype=dtype)
+            if unit == LENGTH_UNIT:
+                values = values * _LENGTH_UNITS_PER_M[LENGTH_UNIT]
+            d = part.create_dataset(name, data=values)
             if unit:
                 d.attrs["unit"] = unit
         bonds = f.create_group("connectivity").create_dataset(
             "bonds", data=np.asarray(model.bonds, np.int32).reshape(-1, 2))
         bonds.attrs["particles_group"] = part.ref
         obs = self.observables = f.create_group("observables")
-        self.offset = self._element(obs, "box_offset", (3,), "m", compress=False)
+        self.offset = self._element(obs, "box_offset", (3,), LENGTH_UNIT, compress=False)
         self.tilt = None  # created by the first frame of a tilted box
         if self.bond_data:
             self.bond_force = self._element(obs, "bond_force", (nb,), "N")
@@ -174,30 +202,32 @@ class TrajectoryWriter:
         """Add one frame (positions unwrapped, SI; ``tilt``: xy, xz, yz of a triclinic box)."""
         i = self.n_frames
         if tilt is not None and self.tilt is None:
-            self.tilt = self._element(self.observables, "box_tilt", (3,), "m", compress=False)
+            self.tilt = self._element(self.observables, "box_tilt", (3,), LENGTH_UNIT,
+                                      compress=False)
             self.tilt.resize(i, axis=0)  # earlier frames (none, in practice): untilted
-            self.file.attrs["fabmd_format_version"] = 2
         self.n_frames += 1
         self.step.resize((i + 1,))
         self.time.resize((i + 1,))
         self.step[i] = step
         self.time[i] = time
         box_lo = np.asarray(box_lo, float)
-        for ds, value in ((self.edges, np.asarray(box_hi, float) - box_lo),
-                          (self.offset, box_lo), (self.position, positions),
-                          (self.velocity, velocities)):
+        per_m = _LENGTH_UNITS_PER_M[LENGTH_UNIT]
+        for ds, value, scale in ((self.edges, np.asarray(box_hi, float) - box_lo, per_m),
+                                 (self.offset, box_lo, per_m),
+                                 (self.position, positions, per_m),
+                                 (self.velocity, velocities, 1.0)):
             if ds is None:
                 continue
             if value is None:
                 raise InputError(f"frame {i}: {ds.name} was announced but not given")
             ds.resize(i + 1, axis=0)
-            ds[i] = value
+            ds[i] = np.asarray(value, float) * scale
         if self.bond_data:
             self.bond_force.resize(i + 1, axis=0)
             self.bond_force[i] = np.nan if bond_force is None else bond_force
         if self.tilt is not None:
             self.tilt.resize(i + 1, axis=0)
-            self.tilt[i] = 0.0 if tilt is None else np.asarray(tilt, float)
+            self.tilt[i] = 0.0 if tilt is None else np.asarray(tilt, float) * per_m
 
     def close(self) -> Path:
         """Close and move the file into place; returns its path."""
@@ -451,6 +481,40 @@ def open_trajectory(path: Path):
     return f
 
 
+def _units_per_m(dataset) -> float:
+    unit = dataset.attrs.get("unit", "m")
+    unit = unit.decode() if isinstance(unit, bytes) else str(unit)
+    if unit not in _LENGTH_UNITS_PER_M:
+        raise TrajectoryFormatError(f"{dataset.name} has the length unit {unit!r}; fabmd "
+                                    f"reads {', '.join(_LENGTH_UNITS_PER_M)}")
+    return _LENGTH_UNITS_PER_M[unit]
+
+
+def length_scale_m(dataset) -> float:
+    """Metres per stored unit of a length dataset (its ``unit``: m, nm or Angstrom)."""
+    return 1.0 / _units_per_m(dataset)
+
+
+def read_lengths(dataset, index=()) -> np.ndarray:
+    """``dataset[index]`` of a length dataset in metres, whatever unit the file used
+    (to within an ulp of the value written)."""
+    return np.asarray(dataset[index], float) / _units_per_m(dataset)
+
+
+def file_author() -> tuple[str, str]:
+    """(name, email) of the person writing: ``$FABMD_AUTHOR`` / ``$FABMD_AUTHOR_EMAIL``,
+    else the login name (H5MD asks for the author, not the program)."""
+    import getpass
+
+    name = os.environ.get("FABMD_AUTHOR", "").strip()
+    if not name:
+        try:
+            name = getpass.getuser()
+        except Exception:  # noqa: BLE001 - no login name (some containers): say so
+            name = "unknown"
+    return name, os.environ.get("FABMD_AUTHOR_EMAIL", "").strip()
+
+
 def _strings(values) -> list[str]:
     return [v.decode() if isinstance(v, bytes) else str(v) for v in values]
 
@@ -463,13 +527,13 @@ def read_model(path: Path, frame: int = -1) -> BeadModel:
     with open_trajectory(path) as f:
         meta = json.loads(f["parameters/fabmd"].attrs["model_json"])
         part = f["particles/all"]
-        positions = part["position/value"][frame]
-        lengths = part["box/edges/value"][frame]
-        lo = f["observables/box_offset/value"][frame]
+        positions = read_lengths(part["position/value"], frame)
+        lengths = read_lengths(part["box/edges/value"], frame)
+        lo = read_lengths(f["observables/box_offset/value"], frame)
         species = part["species"][()]
         fibre_ids = part["fibre_id"][()]
         masses = part["mass"][()]
-        diameters = part["diameter"][()]
+        diameters = read_lengths(part["diameter"])
         bonds = f["connectivity/bonds"][()]
         bond_types = f["parameters/fabmd/bond_type"][()]
     return BeadModel(
@@ -487,7 +551,7 @@ def read_tilt(path: Path, frame: int = -1) -> np.ndarray | None:
     """Tilt factors (xy, xz, yz) [m] of one frame's box; None for an orthogonal box."""
     with open_trajectory(path) as f:
         tilt = f["observables"].get("box_tilt")
-        return None if tilt is None else np.asarray(tilt["value"][frame], float)
+        return None if tilt is None else read_lengths(tilt["value"], frame)
 
 
 def trajectory_path(path: Path) -> Path:

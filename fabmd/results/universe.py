@@ -12,15 +12,16 @@ Beads are atoms, virtual fibres are residues, yarns are segments:
 ``"resid 12"``            virtual fibre 12 (= LAMMPS molecule id)
 ========================  ===============================================
 
-Positions stay in SI metres and time in seconds (``convert_units=False``;
-MDAnalysis's own unit is the ångström). Positions are unwrapped, so fibres are
-continuous across periodic faces (``u.bonds.values(pbc=True)`` gives true bond
-lengths even for the bond that closes a periodic fibre). Per-bond forces [N]
-(> 0 in tension) of the current frame are in ``u.trajectory.ts.data["bond_force"]``
-in the file's bond order (``/connectivity/bonds``, the bead model's); :func:`bond_forces` gives
-them in the order of ``u.bonds`` (which MDAnalysis sorts). ``u.fabmd`` holds the
-family names, the periodicity, the source path and that bond order. A sheared
-periodic cell (a trajectory with ``box_tilt``) gets triclinic ``dimensions``.
+Positions are in SI metres and time in seconds (the file stores lengths in nm; this
+reader scales them to metres where stock MDAnalysis would give ångströms).
+Positions are unwrapped, so fibres are continuous across periodic faces
+(``u.bonds.values(pbc=True)`` gives true bond lengths even for the bond that closes
+a periodic fibre). Per-bond forces [N] (> 0 in tension) of the current frame are in
+``u.trajectory.ts.data["bond_force"]`` in the file's bond order
+(``/connectivity/bonds``, the bead model's); :func:`bond_forces` gives them in the
+order of ``u.bonds`` (which MDAnalysis sorts). ``u.fabmd`` holds the family names,
+the periodicity, the source path and that bond order. A sheared periodic cell (a
+trajectory with ``box_tilt``) gets triclinic ``dimensions``.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from .trajectory import TRAJECTORY_FILE, open_trajectory
+from .trajectory import TRAJECTORY_FILE, length_scale_m, open_trajectory, read_lengths
 
 #: data files a run folder may hold, in the order :func:`load` prefers them without a trajectory
 DATA_FILES = ("final.data", "model.data")
@@ -94,9 +95,23 @@ def reader_class():
 
         def __init__(self, filename, convert_units=False, **kwargs):
             super().__init__(filename, convert_units=False, **kwargs)
+            if self.units.get("length"):
+                self.units["length"] = "m"  # _read_frame scales stored lengths to metres
 
         def _read_frame(self, frame):
             ts = super()._read_frame(frame)
+            # to metres: lengths are stored in nm (format 3) or m (1, 2)
+            part, obs = self._particle_group, self._file.get("observables", {})
+            if ts.has_positions:
+                ts.positions *= length_scale_m(part["position/value"])
+            if ts.dimensions is not None:
+                dims = ts.dimensions
+                dims[:3] *= length_scale_m(part["box/edges/value"])
+                ts.dimensions = dims
+            for name in ("box_offset", "box_tilt"):
+                if name in ts.data and name in obs:
+                    ts.data[name] = np.asarray(ts.data[name], float) * length_scale_m(
+                        obs[name]["value"])
             tilt = ts.data.get("box_tilt")
             if tilt is not None and ts.dimensions is not None:  # a sheared periodic cell
                 from MDAnalysis.lib.mdamath import triclinic_box
@@ -122,7 +137,8 @@ def universe_from_trajectory(path: Path):
         bonds = f["connectivity/bonds"][()]
         u = _build(part["species"].shape[0], part["fibre_id"][()], params["fibre_yarn"][()],
                    names, part["species"][()], [y["name"] for y in yarns],
-                   [y["family"] for y in yarns], part["mass"][()], part["diameter"][()],
+                   [y["family"] for y in yarns], part["mass"][()],
+                   read_lengths(part["diameter"]),
                    bonds, params["bond_type"][()])
     if n_frames == 0:
         raise InputError(f"{path} holds no frames")

@@ -1,0 +1,176 @@
+"""SIGTERM / SIGINT stop a run at a chunk boundary with a checkpoint; --resume continues
+whichever stage was interrupted and repeats the uninterrupted run exactly."""
+
+import json
+import os
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from fabmd.engine import Engine
+from fabmd.errors import RunInterrupted
+from fabmd.pipeline import run_test
+from fabmd.results.folder import read_csv
+
+from .conftest import fabmd_command, run_cli
+from .test_pipeline import TINY
+
+pytestmark = pytest.mark.lammps
+
+
+#: the tiny scene with a crimp ramp long enough to span chunks (a stop lands mid-ramp)
+SCENE = TINY.replace("[crimp]\n", "[crimp]\nramp_transits = 100\n")
+
+
+def tiny(tmp_path):
+    import tomllib
+
+    from fabmd.scenefile import parse_scene
+
+    assert "ramp_transits = 100" in SCENE
+    path = tmp_path / "tiny.toml"
+    path.write_text(SCENE)
+    return path, parse_scene(tomllib.loads(SCENE), source=str(path))
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """The tiny pipeline run through, as the command line runs it (a few seconds)."""
+    root = tmp_path_factory.mktemp("whole")
+    path, _ = tiny(root)
+    out = run_cli("test", "tension", str(path), "--out", str(root / "run"), "--quiet")
+    assert out.returncode == 0, out.stderr
+    return root / "run"
+
+
+class SignalAt:
+    """A progress display that sends this process a real signal once stage ``label`` has
+    done ``fraction`` of its steps (at a chunk boundary: which chunk is then certain)."""
+
+    def __init__(self, label: str, fraction: float, signum=signal.SIGTERM):
+        self.label, self.fraction, self.signum = label, fraction, signum
+        self.sent = False
+
+    def __call__(self, label: str):
+        def progress(done: int, total: int) -> None:
+            if label == self.label and not self.sent and done >= self.fraction * total:
+                self.sent = True
+                os.kill(os.getpid(), self.signum)
+        return progress
+
+
+def assert_same_result(resumed, whole):
+    """The resumed pipeline's test curve equals the uninterrupted one to 1e-6 of the peak
+    force (measured: 0, bit for bit), and the crimped states agree."""
+    a, b = read_csv(whole / "tension" / "curve.csv"), read_csv(resumed / "tension" / "curve.csv")
+    assert len(a["force_n"]) == len(b["force_n"]) > 10
+    np.testing.assert_array_equal(b["elongation_pct"], a["elongation_pct"])
+    peak = np.abs(a["force_n"]).max()
+    assert peak > 0
+    assert np.abs(b["force_n"] - a["force_n"]).max() <= 1e-6 * peak
+    assert (resumed / "crimp" / "crimped.data").read_text().split("Atoms")[1] == \
+        (whole / "crimp" / "crimped.data").read_text().split("Atoms")[1]
+
+
+# crimp: after the first chunk, in the middle of the ramp; coupon: its relaxation ends in
+# its first chunk, so the stop comes between runs; tension: half way through the loading
+@pytest.mark.parametrize("stage,fraction", [("crimp", 0.0), ("coupon", 0.0),
+                                            ("tension", 0.5)])
+def test_sigterm_then_resume_equals_uninterrupted(tmp_path, monkeypatch, uninterrupted,
+                                                  stage, fraction):
+    path, scene = tiny(tmp_path)
+    monkeypatch.setattr("fabmd.engine.runner.Progress", SignalAt(stage, fraction))
+    out = tmp_path / "run"
+    with pytest.raises(RunInterrupted, match="--resume") as caught:
+        run_test(scene, "tension", out, engine=Engine(progress=True))
+    assert caught.value.exit_code == 5
+    assert caught.value.run_dir == (out / stage).resolve()
+    assert (out / stage / "checkpoint.json").exists()
+    assert not (out / stage / "summary.json").exists()  # the stage did not finish
+    if stage != "tension":
+        assert not (out / "tension").exists()
+    if stage == "crimp":  # stopped mid-ramp: the resume continues the ramp run
+        state = json.loads((out / "crimp" / "checkpoint.json").read_text())
+        assert 0 < state["step"] - state["run_start"] < state["run_steps"]
+    # a new process resumes (as after a pre-empted job): it continues the interrupted stage
+    resumed = run_cli("test", "tension", str(path), "--out", str(out), "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert "Unused restart file" not in (out / stage / "log.resume.lammps").read_text()
+    assert_same_result(out, uninterrupted)
+
+
+def test_sigterm_to_the_command_exits_5_and_names_the_way_on(tmp_path, uninterrupted):
+    """A real scheduler's SIGTERM to ``fabmd test``: exit code 5, a one-line message that
+    names the folder and --resume; --resume then finishes with the same result."""
+    import subprocess
+
+    from .conftest import clean_env
+
+    path, _ = tiny(tmp_path)
+    out = tmp_path / "run"
+    proc = subprocess.Popen(fabmd_command() + ["test", "tension", str(path), "--out", str(out),
+                                               "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=clean_env())
+    deadline = time.time() + 120
+    while not (out / "crimp" / "in.crimp").exists() and time.time() < deadline:
+        time.sleep(0.02)  # the handler is in place once a stage folder is written
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 5, err
+    assert "--resume" in err and str(out) in err and "SIGTERM" in err
+    resumed = run_cli("test", "tension", str(path), "--out", str(out), "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert_same_result(out, uninterrupted)
+
+
+DRIVER = """
+import os, signal, sys
+import fabmd.engine.runner as runner
+from fabmd.cli import main
+
+class SignalAt:  # a progress display (rank 0 only) that SIGTERMs its own rank, once
+    def __init__(self, label):
+        self.label, self.sent = label, False
+        self.done = 0
+    def __call__(self, done, total):
+        if self.label == "tension" and not self.sent and done >= 0.5 * total:
+            self.sent = True
+            os.kill(os.getpid(), signal.SIGTERM)
+
+runner.Progress = SignalAt
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_sigterm_to_rank_0_only_stops_every_rank_and_resumes_under_mpi(tmp_path, mpirun):
+    """Under mpirun a launcher may signal rank 0 only: the ranks agree at the chunk
+    boundary, all stop with exit code 5 (no hang), and a 2-rank --resume equals the
+    uninterrupted 2-rank run."""
+    import subprocess
+    import sys
+
+    from .conftest import clean_env
+
+    path, _ = tiny(tmp_path)
+    driver = tmp_path / "driver.py"
+    driver.write_text(DRIVER)
+    args = ["test", "tension", str(path)]
+
+    def mpi_run(*cmd, timeout=300):
+        return subprocess.run([str(mpirun), "-np", "2", *cmd], capture_output=True,
+                              text=True, env=clean_env(), timeout=timeout)
+
+    whole = mpi_run(*fabmd_command(), *args, "--out", str(tmp_path / "whole"), "--quiet")
+    assert whole.returncode == 0, whole.stderr
+    cut = mpi_run(sys.executable, str(driver), *args, "--out", str(tmp_path / "cut"))
+    assert cut.returncode == 5, cut.stderr
+    assert "SIGTERM" in cut.stderr and (tmp_path / "cut" / "tension" / "checkpoint.json").exists()
+    resumed = mpi_run(*fabmd_command(), *args, "--out", str(tmp_path / "cut"), "--resume",
+                      "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert_same_result(tmp_path / "cut", tmp_path / "whole")
