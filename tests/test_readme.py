@@ -46,7 +46,8 @@ def run_block(code: str, namespace: dict | None = None,
 
 
 KNOWN = ("from fabmd.scenefile import load_scene", "FibreTension(", "fabmd.load(\"runs/crimp\")",
-         "from ovito", "ContactModel(friction=0.3)", "PictureFrame(", "Drape(")
+         "from ovito", "ContactModel(friction=0.3)", "PictureFrame(", "Drape(",
+         'mda.Universe("model.data", "trajectory.h5"')
 
 
 def test_every_python_block_of_the_readme_is_run_here():
@@ -87,6 +88,26 @@ def test_mdanalysis_snippet_measures_the_crimped_state(monkeypatch, tmp_path):
         assert 100 * measured[fam] == pytest.approx(pct, rel=1e-6)
         assert 100 * measured[fam] != pytest.approx(summary["loose"]["crimp_pct"][fam],
                                                     rel=1e-3)
+
+
+@pytest.mark.lammps
+def test_stock_mdanalysis_snippet_reads_a_run_folder(monkeypatch, tmp_path):
+    import numpy as np
+
+    from fabmd.protocols.crimp import Crimp
+    from fabmd.results.universe import load
+
+    run = tmp_path / "crimp"
+    Crimp(expansion={"warp": -0.05, "weft": -0.05}).run(plain_weave_cell(cells=(1, 1)), run,
+                                                        engine=Engine(progress=False))
+    monkeypatch.chdir(run)
+    u = run_block(block(KNOWN[7]))["u"]
+    ours = load(run)
+    assert len(u.atoms) == len(ours.atoms) and len(u.trajectory) == len(ours.trajectory)
+    u.trajectory[-1]
+    ours.trajectory[-1]
+    # stock MDAnalysis gives ångströms, fabmd's reader SI metres: the same positions
+    assert np.allclose(u.atoms.positions * 1e-10, ours.atoms.positions, rtol=1e-5, atol=1e-12)
 
 
 def test_ovito_snippet():
