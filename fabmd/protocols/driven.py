@@ -2,8 +2,10 @@
 
 A driven test (tension, picture frame, bias extension, periodic cells) moves a
 boundary — clamps or the periodic box — at a constant speed reached by a smooth
-start (:class:`~fabmd.scene.loading.SmoothStartSpeed`), damps the free beads
-viscously (γ = m/τ) and writes, through ``lammps_templates/driven_outputs.lmp``:
+start (:class:`~fabmd.scene.loading.SmoothStartSpeed`), damps the free beads with a
+drag γ = m/τ on their motion relative to the tools' affine velocity field
+(:mod:`fabmd.scene.drag`; protocols without ``drag`` damp the absolute velocity) and
+writes, through ``lammps_templates/driven_outputs.lmp``:
 
 * ``means.dat`` — forces and powers averaged over each output interval (exact
   integrals of the external and the damping power);
@@ -43,6 +45,7 @@ from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
+from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import check_trajectory
@@ -152,6 +155,12 @@ class DrivenTest:
         tau = self.damping_time_s or self.duration_s(model) / 10
         return float(np.median(model.masses)) / tau
 
+    def drag_block(self, model: BeadModel, field: AffineField) -> tuple[str, str]:
+        """(LAMMPS text, per-bead damping power) of the drag on the free beads: relative to
+        the tools' affine velocity ``field`` (``drag = "affine"``) or on the absolute
+        velocity (``"absolute"``); :mod:`fabmd.scene.drag`."""
+        return drag_commands(getattr(self, "drag", "absolute"), "free", self.gamma(model), field)
+
     def check_loading(self) -> None:
         """Validate the fields every driven test has (speed, ramp, damping time, samples,
         trajectory); errors name ``<protocol>.<field>``."""
@@ -162,6 +171,8 @@ class DrivenTest:
             inputs.positive(f"{name}.damping_time_s", self.damping_time_s)
         inputs.positive_int(f"{name}.samples", self.samples, minimum=10)
         check_trajectory(f"{name}.trajectory", self.trajectory)
+        if hasattr(self, "drag"):
+            inputs.one_of(f"{name}.drag", self.drag, DRAG_KINDS)
 
     def scene_text(self, model: BeadModel, dt: float, protocol_text: str, *extra: str,
                    after: tuple[str, ...] | None = None) -> str:
@@ -199,12 +210,17 @@ class DrivenTest:
 
     def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
                       mean_values: str = "", mean_names: str = "", print_values: str = "",
-                      print_names: str = "", thermo_values: str = "") -> str:
-        """Interval means, printed curve and thermo (``driven_outputs.lmp``)."""
+                      print_names: str = "", thermo_values: str = "",
+                      damping_power: str | None = None) -> str:
+        """Interval means, printed curve and thermo (``driven_outputs.lmp``);
+        ``damping_power``: the drag's power per free bead (default: that of a drag
+        γ·v on the absolute velocity)."""
         every = self.every(model)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
+        if damping_power is None:
+            damping_power = f"{self.gamma(model):.10g}*(vx*vx+vy*vy+vz*vz)"
         return render("driven_outputs", external_power=external_power, strain_energy=strain,
-                      external_ref=external_ref, gamma=self.gamma(model), every=every,
+                      external_ref=external_ref, damping_power=damping_power, every=every,
                       mean_values=mean_values, mean_names=mean_names,
                       print_values=print_values, print_names=print_names,
                       thermo_values=thermo_values,

@@ -39,6 +39,7 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..results.curves import tangent_intersection, values_at
 from ..results.fibre_angles import fibre_shear_angles
+from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
@@ -119,8 +120,12 @@ class PictureFrame(DrivenTest):
             (default 1e-3: on the example coupon halving it changes the curve by < 0.1 %;
             check with ``check_rate``).
         ramp_fraction: share of the test spent reaching full speed smoothly.
-        damping_time_s: τ of the viscous damping γ = m/τ of the free fabric (default:
-            a tenth of the test).
+        damping_time_s: τ of the drag γ = m/τ on the free fabric (default: a tenth of
+            the test).
+        drag: ``"affine"`` (default): the drag acts on the motion relative to the frame's
+            affine velocity field, so it does not add to the frame force;
+            ``"absolute"``: on the absolute velocity (the old ``fix viscous``, which the
+            frame force then contains). :mod:`fabmd.scene.drag`.
         contact: fibre–fibre contact.
         time_step: time-step policy.
         samples: curve points.
@@ -140,6 +145,7 @@ class PictureFrame(DrivenTest):
     speed_fraction: float = 1e-3
     ramp_fraction: float = 0.1
     damping_time_s: float | None = None
+    drag: str = "affine"
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 200
@@ -292,9 +298,15 @@ class PictureFrame(DrivenTest):
         ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
+        ax, ay = fmt(g.pin_a[0]), fmt(g.pin_a[1])
+        damping, damping_power = self.drag_block(model, AffineField(
+            vx=f"v_frame_lxx*(x-({ax}))+v_frame_lxy*(y-({ay}))",
+            vy=f"v_frame_lxy*(x-({ax}))+v_frame_lxx*(y-({ay}))",
+            tools="frame"))
         outputs = self.outputs_block(model, power, power_ref, print_values="${d} ${shear_deg}",
                                      print_names="displacement_m shear_angle_lammps_deg",
-                                     thermo_values="v_d v_shear_deg c_p_ext")
+                                     thermo_values="v_d v_shear_deg c_p_ext",
+                                     damping_power=damping_power)
         text = render("picture_frame", frame_length=g.frame_length_m, ax=g.pin_a[0],
                       ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
                       y_hi=g.inner[3], pretension=self.pretension_block(model),
@@ -302,7 +314,7 @@ class PictureFrame(DrivenTest):
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
                       displacement_next=load.lammps_displacement("t_next"),
                       velocity_next=load.lammps_velocity("t_next"),
-                      gamma=self.gamma(model), outputs=outputs)
+                      damping=damping, outputs=outputs)
         return self.scene_text(model, dt, text)
 
     def reduce(self, run_dir: Path, model: BeadModel,
