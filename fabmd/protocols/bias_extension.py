@@ -117,6 +117,7 @@ class BiasExtension(DrivenTest):
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
     protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
     rate_curve: ClassVar[tuple[str, str]] = ("displacement_m", "force_n")
     rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n_m"}
 
@@ -249,6 +250,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
         {"path": "curve.png",
          "series": [{"x": 1e3 * d, "y": force, "label": "clamp force"}],
          "xlabel": "displacement d [mm]", "ylabel": "force [N]", "title": "Bias extension",
+         "x_column": "displacement_m", "x_scale": 1e3,
          "notes": f"H {1e3 * h:.1f} mm, W {1e3 * w:.1f} mm"
                   f"\nKE/U after start-up <= {ke if ke is None else round(ke, 3)}"
                   f"\n{model.n_beads} beads"},
@@ -257,6 +259,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
                     {"x": 1e3 * np.interp(steps, out["step"], d), "y": fibre_gamma,
                      "style": "o", "label": "fibres, central zone"}],
          "xlabel": "displacement d [mm]", "ylabel": "central shear angle γ [deg]",
+         "x_column": "displacement_m", "x_scale": 1e3,
          "title": "Bias extension: central-zone shear angle"},
     ]
     return DrivenResult(Path(run_dir), curve, summary, plots)

@@ -49,7 +49,7 @@ from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import check_trajectory
-from ..scene.quasi_static import relaxation_settled
+from ..scene.quasi_static import interval_columns, interval_verdict, relaxation_settled
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
 
@@ -76,6 +76,7 @@ class DrivenResult(RunResult):
     def plot(self) -> None:
         for spec in self.plots:
             spec = dict(spec)
+            spec.pop("x_column", None), spec.pop("x_scale", None)  # for mark_plots only
             plot_curves(self.run_dir / spec.pop("path"), **spec)
 
 
@@ -93,6 +94,8 @@ class DrivenTest:
     rate_keys: ClassVar[dict[str, str]] = {}
     #: the quasi-static measures judged after the run (summary key -> largest allowed)
     quasi_static_limits: ClassVar[dict[str, float]] = QUASI_STATIC_LIMITS
+    #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
+    interval_axis: ClassVar[tuple[str, float] | None] = None
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -262,14 +265,17 @@ class DrivenTest:
                                   trajectory=trajectory.name if trajectory else None)
             if getattr(self, "relax", None) is not None and not resume:  # starts relaxing
                 result.summary["start_settled"] = relaxation_settled(run_dir / "log.lammps")
+            if self.interval_axis is not None:
+                add_interval_verdict(result, *self.interval_axis)
             verdict = quasi_static_verdict(result.summary, self.quasi_static_limits)
             result.summary["quasi_static"] = verdict
             if not verdict["ok"]:
-                for spec in getattr(result, "plots", []):  # no plot that looks valid
-                    spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
-                    spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"]])
+                mark_plots(result, verdict, self.interval_axis)
+                where = ("; trust only " + ", ".join(f"{a:g}-{b:g}" for a, b in
+                                                     verdict["trusted"])
+                         if verdict.get("partly") else ": do not use the curve")
                 warnings.warn(f"{self.protocol} in {run_dir}: not quasi-static "
-                              f"({'; '.join(verdict['problems'])}): do not use the curve; "
+                              f"({'; '.join(verdict['problems'])}){where}; "
                               f"lower speed_fraction (inertia, drag) or check the specimen "
                               f"holds together", QuasiStaticWarning, stacklevel=2)
         if check_rate:
@@ -311,7 +317,10 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
     ``limits`` (default
     :data:`QUASI_STATIC_LIMITS`) is read from the summary (``damping_share`` computed from
     its energy balance); a measure the test does not report is not judged. A summary whose
-    ``start_settled`` is False (the relaxation before the loading did not settle) fails."""
+    ``start_settled`` is False (the relaxation before the loading did not settle) fails.
+    With a per-interval verdict (``quasi_static_intervals``, :func:`add_interval_verdict`)
+    every failed interval is a problem too; ``partly`` is True when only intervals failed
+    and some passed (``trusted``: their ranges), so the rest of the curve can be used."""
     limits = QUASI_STATIC_LIMITS if limits is None else limits
     derived = {"damping_share": lambda: damping_share(summary),
                "energy_balance_error": lambda: (summary.get("energy_balance") or {}).get(
@@ -323,8 +332,46 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
     if summary.get("start_settled") is False:
         problems.append("the specimen was still moving when the loading started (its "
                         "relaxation did not settle within relax.max_steps)")
+    intervals = summary.get("quasi_static_intervals")
+    whole_run_ok = not problems
+    trusted = flagged = []
+    if intervals:
+        trusted, flagged = intervals["trusted"], intervals["flagged"]
+        problems += [p for i in intervals["intervals"] for p in i["problems"]]
     return {"ok": not problems, "values": values, "limits": dict(limits),
-            "problems": problems}
+            "problems": problems, "flagged": flagged, "trusted": trusted,
+            "partly": bool(whole_run_ok and flagged and trusted)}
+
+
+def add_interval_verdict(result: DrivenResult, column: str, width: float) -> dict:
+    """Judge ``result``'s curve per interval of ``column`` (:func:`~fabmd.scene.
+    quasi_static.interval_verdict`): the verdict goes into the summary
+    (``quasi_static_intervals``), its per-sample columns into the curve."""
+    c = result.curve
+    verdict = interval_verdict(c[column], c["external_work_j"], c["damping_dissipation_j"],
+                               c["kinetic_energy_j"], c["strain_energy_j"], width,
+                               name=column)
+    result.summary["quasi_static_intervals"] = verdict
+    result.curve.update(interval_columns(c[column], verdict))
+    return verdict
+
+
+def mark_plots(result: DrivenResult, verdict: dict,
+               interval_axis: tuple[str, float] | None) -> None:
+    """Say on every plot that the curve is not (or only partly) quasi-static: a
+    whole-run failure in the title, failed intervals shaded (a plot spec whose x is not
+    the interval column names its own: ``x_column``, ``x_scale``)."""
+    for spec in getattr(result, "plots", []):
+        if verdict.get("partly") and interval_axis is not None:
+            column = spec.get("x_column", interval_axis[0])
+            scale = spec.get("x_scale", 1.0)
+            axis = result.curve[interval_axis[0]]
+            spec["spans"] = [[scale * float(np.interp(v, axis, result.curve[column]))
+                              for v in ab] for ab in verdict["flagged"]]
+            spec["title"] = "PARTLY NOT QUASI-STATIC (shaded): " + spec.get("title", "")
+        else:  # no plot that looks valid
+            spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
+        spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"][:4]])
 
 
 def relative_change(a, b) -> float | None:

@@ -154,6 +154,7 @@ class PictureFrame(DrivenTest):
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
     protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
     rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
     rate_keys: ClassVar[dict[str, str]] = {
         "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",

@@ -79,6 +79,7 @@ class Tension(DrivenTest):
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
     protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("elongation_pct", 0.25)
     rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
     rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n"}
 

@@ -26,14 +26,18 @@ def _pyplot():
 
 
 def curves_figure(series: list[dict], xlabel: str, ylabel: str, title: str = "",
-                  notes: str = ""):
+                  notes: str = "", spans: list | None = None):
     """A matplotlib figure of one or more curves (for notebooks; see :func:`plot_curves`).
 
     Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``, ``lw``.
-    Axis labels should carry units, e.g. ``"strain [%]"``.
+    Axis labels should carry units, e.g. ``"strain [%]"``. ``spans``: [from, to] ranges
+    of x shaded as not quasi-static (the part of the curve not to trust).
     """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+    for k, (a, b) in enumerate(spans or []):
+        ax.axvspan(a, b, color="tab:red", alpha=0.15, lw=0,
+                   label="not quasi-static" if k == 0 else None)
     for s in series:
         ax.plot(np.asarray(s["x"]), np.asarray(s["y"]), s.get("style", "-"),
                 label=s.get("label"), lw=s.get("lw", 1.6))
@@ -42,7 +46,7 @@ def curves_figure(series: list[dict], xlabel: str, ylabel: str, title: str = "",
     if title:
         ax.set_title(title)
     ax.grid(True, alpha=0.3)
-    if any(s.get("label") for s in series):
+    if spans or any(s.get("label") for s in series):
         ax.legend(frameon=False)
     if notes:
         ax.text(0.02, 0.98, notes, transform=ax.transAxes, va="top", ha="left", fontsize=8,
@@ -51,14 +55,15 @@ def curves_figure(series: list[dict], xlabel: str, ylabel: str, title: str = "",
 
 
 def plot_curves(path: Path, series: list[dict], xlabel: str, ylabel: str, title: str = "",
-                notes: str = "") -> Path | None:
+                notes: str = "", spans: list | None = None) -> Path | None:
     """Plot one or more curves into ``path`` (rank 0 only).
 
-    Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``.
+    Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``;
+    ``spans`` as for :func:`curves_figure`.
     """
     if not mpi.is_root():
         return None
-    fig = curves_figure(series, xlabel, ylabel, title, notes)
+    fig = curves_figure(series, xlabel, ylabel, title, notes, spans)
     return _save(fig, path)
 
 
