@@ -14,8 +14,11 @@ follows from the power balance F·ḋ = −Σ_clamped f·v, integrated exactly o
 output interval: F = ΔW/Δd. Reported the standard way (Harrison et al. 2004):
 F_s = F/(2 cos θ) and F_norm = F_s·L_frame/L_fabric², L_fabric the side of the
 fabric in the frame (in this model the clamped strips shear with the frame, so
-the whole coupon is the sheared area). The shear-locking angle is where the
-tangents of the low initial part and the steep final part of F_norm(γ) meet.
+the whole coupon is the sheared area). The shear-locking angle
+(:func:`fabmd.results.curves.locking_angle`): a line fitted to F_norm over a fixed
+initial range (5–15°), the departure where F_norm stays above twice that line for 5°,
+and the tangent over those 5° meeting the initial line; it does not depend on where
+the test stops.
 
 ``pretension_strain`` is a clamping preload: the rest length of the bonds of the
 unclamped fibres shrinks by that strain (ramped, clamps held) before the free
@@ -37,7 +40,7 @@ from ..errors import InputError
 from ..model.bead_model import BeadModel, BondType
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
-from ..results.curves import tangent_intersection, values_at
+from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
@@ -134,6 +137,10 @@ class PictureFrame(DrivenTest):
             (``TrajectoryOutput(frames=0)``: none written, none measured).
         report_angles_deg: shear angles at which forces are reported.
         relax: stop criterion of the free relaxation before the test (clamps held).
+        locking_initial_deg: shear-angle range [deg] of the initial branch of the
+            locking-angle method (:func:`fabmd.results.curves.locking_angle`).
+        locking_factor: the force over the initial line that marks the departure
+            from it (> 1).
     """
 
     max_shear_angle_deg: float = 60.0
@@ -152,6 +159,8 @@ class PictureFrame(DrivenTest):
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    locking_initial_deg: tuple[float, float] = (5.0, 15.0)
+    locking_factor: float = 2.0
 
     protocol: ClassVar[str] = PROTOCOL
     interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
@@ -175,6 +184,11 @@ class PictureFrame(DrivenTest):
         self.check_loading()
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
+        lo, hi = self.locking_initial_deg
+        inputs.in_range("picture_frame.locking_initial_deg[0]", lo, 0, 80)
+        inputs.in_range("picture_frame.locking_initial_deg[1]", hi, lo, 80, low_open=True)
+        inputs.in_range("picture_frame.locking_factor", self.locking_factor, 1, 100,
+                        low_open=True)
 
     # -- geometry ---------------------------------------------------------------------
     def frame(self, model: BeadModel) -> FrameGeometry:
@@ -350,9 +364,12 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
              **energy_columns(out)}
     dmax = test.max_displacement(model)
     started = started_mask(out, test.loading(model), d / dmax)
-    valid = gamma > 0.02 * gamma.max()  # past the first, noisy intervals of the smooth start
-    lock = tangent_intersection(gamma[valid], fnorm[valid])
-    initial = tangent_intersection(np.radians(gamma[valid]), fnorm[valid])["initial_slope"]
+    # by a method that reads the curve only up to a little past locking (not the last part)
+    lock = locking_angle(gamma, fnorm, initial_deg=test.locking_initial_deg,
+                         factor=test.locking_factor)
+    # the initial branch's slope, per radian
+    initial = (None if lock["initial_slope"] is None
+               else float(np.degrees(lock["initial_slope"])))
     steps, fibre_gamma = fibre_shear_angles(run_dir, g.centre,
                                             (g.free_side_m / 4, g.free_side_m / 4))
     kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)
