@@ -12,7 +12,8 @@ steps.
 
 Outputs in the run folder: ``crimped.data`` + ``crimped.json`` (the as-woven
 bead model, reusable by the test protocols), ``history.dat``/``history.csv``,
-``summary.json`` (loose and crimped measures), ``history.png``,
+``summary.json`` (loose and crimped measures, the yarn tension per family in N and
+cN/tex: :mod:`fabmd.results.yarn_tension`), ``history.png``,
 ``sections.png`` (top view and cross-sections along warp and weft) and the
 trajectory of the ramp and the relaxation (``trajectory.h5``, ParaView files; the
 crimped state is its last frame).
@@ -37,6 +38,7 @@ from ..results.measure import fabric_measures
 from ..results.plots import plot_curves
 from ..results.preview import preview_png
 from ..results.trajectory import finalise, salvage
+from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import Damping, QuasiStatic
@@ -296,5 +298,7 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
         "overlap": overlap_summary(run_dir, crimp.contact),
+        # the tension the crimp leaves in the yarns (N per yarn, cN/tex), per family
+        "yarn_tension": yarn_tension(crimped),
     }
     return crimped, summary
