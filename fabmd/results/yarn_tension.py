@@ -6,7 +6,9 @@ the sum over its fibres (the axial force through a cross-section of the yarn), a
 family's the mean over its yarns. In textile units: T/tex in cN/tex (1 cN/tex =
 0.01 N per tex of the yarn's linear density), when the model knows the linear density
 (a model built from a fabric does: ``info["families"][family]["linear_density_tex"]``).
-Cohesion links between the fibres of a yarn are not fibres and are left out.
+Cohesion links between the fibres of a yarn are not fibres and are left out. (The
+crimped measures' ``tension``, :func:`fabmd.results.measure.family_tension_n`, give the
+mean and largest fibre tension; this adds the spread over yarns and cN/tex.)
 """
 
 from __future__ import annotations
@@ -14,15 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.bead_model import BeadModel
-
-
-def bond_tensions_n(model: BeadModel) -> np.ndarray:
-    """Tension of every bond, 2K·(r − r0) [N] (cohesion links included; mask them out
-    with ``model.fibre_bond_mask()``)."""
-    coefficient = np.array([bt.coefficient for bt in model.bond_type_table])
-    rest = np.array([bt.rest_length_m for bt in model.bond_type_table])
-    t = model.bond_types - 1
-    return 2.0 * coefficient[t] * (model.bond_lengths() - rest[t])
+from .measure import bond_tension_n
 
 
 def yarn_tension(model: BeadModel) -> dict[str, dict]:
@@ -32,7 +26,7 @@ def yarn_tension(model: BeadModel) -> dict[str, dict]:
     if not model.n_bonds:
         return {}
     fibre_bonds = model.fibre_bond_mask()
-    tension = bond_tensions_n(model)[fibre_bonds]
+    tension = bond_tension_n(model)[fibre_bonds]
     fibre_of_bond = model.fibre_ids[model.bonds[fibre_bonds, 0]]
     n_fibres = len(model.fibre_yarn)
     total = np.bincount(fibre_of_bond, weights=tension, minlength=n_fibres + 1)

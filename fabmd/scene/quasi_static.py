@@ -137,7 +137,8 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
 
     * ``damping_share`` = ΔW_drag / ΔW_external: the drag's share of the work done in it;
     * ``inertia_share`` = |ΔKE| / ΔW_external: the share that went into kinetic energy;
-    * ``kinetic_to_strain_energy``: the largest KE / U at the samples in it.
+    * ``kinetic_to_strain_energy``: the largest KE / U at the samples in it, U no less
+      than 1 % of the run's largest strain energy (a slack start has almost none).
 
     The cumulative works are read at the interval's ends by interpolation. A share
     whose interval took no external work (|ΔW| below 1e-9 of the run's) is not
@@ -163,6 +164,7 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
     edges = np.arange(0.0, top, width)
     edges = np.append(edges, top) if top > edges[-1] else edges
     floor = 1e-9 * max(float(np.abs(w_ext).max()), 1e-300)
+    u_floor = max(0.01 * float(u.max()), 1e-300)
     intervals = []
     for a, b in zip(edges[:-1], edges[1:], strict=True):
         if b - a < 1e-6 * width:
@@ -177,7 +179,7 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
         measures = {
             "damping_share": ddrag / dw if abs(dw) > floor else None,
             "inertia_share": abs(dke) / abs(dw) if abs(dw) > floor else None,
-            "kinetic_to_strain_energy": float(np.max(kes / np.maximum(us, 1e-300))),
+            "kinetic_to_strain_energy": float(np.max(kes / np.maximum(us, u_floor))),
         }
         problems = [f"{name} {a:g}-{b:g}: {k} = {v:.2g} > {limits[k]:g}"
                     for k, v in measures.items()
