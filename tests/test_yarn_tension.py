@@ -7,6 +7,7 @@ import math
 import pytest
 
 from fabmd.engine import Engine
+from fabmd.errors import InputError
 from fabmd.model.bead_model import Yarn
 from fabmd.protocols.crimp import Crimp
 from fabmd.results.yarn_tension import tension_line, yarn_tension
@@ -56,3 +57,26 @@ def test_crimp_reports_the_tension_of_fibres_held_at_their_ends(tmp_path):
     t = result.summary["yarn_tension"]["warp"]
     assert t["yarn_n"] == pytest.approx(EA * 0.01, rel=0.01)
     assert t["yarn_max_n"] - t["yarn_min_n"] < 0.01 * t["yarn_n"]
+
+
+def test_bad_target_tensions_are_refused_before_lammps(tmp_path):
+    with pytest.raises(InputError, match="crimp.target_tension"):
+        Crimp(target_tension="3 furlongs")
+    with pytest.raises(InputError, match="must be > 0"):
+        Crimp(target_tension={"warp": "-1 cN/tex"})
+    with pytest.raises(InputError, match="linear density"):  # the model has no tex
+        Crimp(target_tension="1 cN/tex").run(parallel_fibres(), tmp_path / "c")
+    assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.lammps
+def test_crimp_reaches_a_target_tension(tmp_path):
+    # straight fibres held at their ends carry T = -E·A·e for a rest-length change e: the
+    # search must land on e = -T/(E·A) from a start at -1 %
+    target = 0.4 * EA * 0.01
+    result = Crimp(expansion={"warp": -0.01}, target_tension=f"{target} N").run(
+        parallel_fibres(diameter_m=DIAMETER), tmp_path / "crimp", engine=Engine(progress=False))
+    search = result.summary["tension_search"]
+    assert search["reached"] and len(search["runs"]) <= 3
+    assert result.summary["yarn_tension"]["warp"]["yarn_n"] == pytest.approx(target, rel=0.05)
+    assert result.summary["expansion"]["warp"] == pytest.approx(-0.004, rel=0.05)

@@ -65,6 +65,11 @@ class Crimp:
         time_step: time-step policy.
         ramp_transits: ramp duration in axial wave-transit times of the longest fibre.
         samples: history lines written.
+        target_tension: the yarn tension the crimped fabric should carry, per family
+            (``{"warp": "1 cN/tex", "weft": "4 N"}``) or one for all: N per yarn or
+            cN/tex; the expansion of those families is then searched for it
+            (:mod:`fabmd.protocols.crimp_tension`; ``expansion`` is the start). None:
+            the expansion as given, whatever tension it leaves (reported either way).
         trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
             stops once quasi-static, so frames are spread over :meth:`expected_steps`
             (the ramp and a quarter of the relaxation budget); the crimped state is
@@ -80,6 +85,7 @@ class Crimp:
     ramp_transits: float = 40.0
     samples: int = 200
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
+    target_tension: dict | str | float | None = None
 
     def __post_init__(self):
         if not isinstance(self.expansion, dict):
@@ -91,6 +97,10 @@ class Crimp:
         inputs.positive("crimp.ramp_transits", self.ramp_transits)
         inputs.positive_int("crimp.samples", self.samples, minimum=2)
         check_trajectory("crimp.trajectory", self.trajectory)
+        if self.target_tension is not None:
+            from .crimp_tension import check_target_tension
+
+            check_target_tension(self.target_tension)
 
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
@@ -196,8 +206,14 @@ class Crimp:
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
             overwrite: bool = False) -> CrimpResult:
-        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures."""
+        """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures.
+        With ``target_tension``, several crimp runs search the expansion for it."""
         engine = engine or Engine()
+        if self.target_tension is not None:
+            from .crimp_tension import crimp_to_tension
+
+            self.check_model(model)
+            return crimp_to_tension(self, model, out, engine=engine, overwrite=overwrite)
         model = with_room_in_z(model)
         text = self.input_text(model)  # validates before anything is written
         run_dir = write_run_folder(out, PROTOCOL, model, text,
