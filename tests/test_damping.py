@@ -145,6 +145,10 @@ def test_old_drag_is_flagged_where_it_dominates_and_only_there(frames):
     assert s["quasi_static"]["partly"] and s["quasi_static"]["flagged"][0][0] == 0.0
     assert caught and "shear_angle_deg 0-5: damping_share" in caught[0]
     assert "trust only" in caught[0]
+    plot = result.plots[0]  # the plot shades the flagged intervals
+    assert plot["title"].startswith("PARTLY NOT QUASI-STATIC")
+    assert plot["spans"] == s["quasi_static"]["flagged"]  # its x is the shear angle
+    assert (result.run_dir / "curve.png").stat().st_size > 0
     csv = read_csv(result.run_dir / "curve.csv")
     early = csv["shear_angle_deg"] < 5
     assert np.all(csv["interval_quasi_static"][early] == 0)
