@@ -6,8 +6,9 @@ or as ``"1 cN/tex"`` (the model must know the family's linear density). Each fam
 tension after crimp falls as its expansion α·ΔT rises; the search starts from the
 scene's expansion, takes a first step with the yarn's axial stiffness
 (ΔT_yarn ≈ −n_fibres·E·A·Δ(α·ΔT), the stiffest the response can be) and then secant
-steps, all families at once, until every family is within ``tolerance`` of its target
-(default 5 %) or ``max_runs`` crimp runs are spent (then it warns and keeps the
+steps (bisection once the target is bracketed and a secant step would leave the
+bracket), all families at once, until every family is within ``tolerance`` of its target
+(default 5 %) or ``max_runs`` (8) crimp runs are spent (then it warns and keeps the
 closest). Every run overwrites the crimp folder; the last one stays, and its
 ``summary.json`` → ``tension_search`` lists the expansions tried and the tensions they
 gave.
@@ -78,7 +79,7 @@ def yarn_axial_stiffness_n(model: BeadModel, family: str) -> float:
 
 
 def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
-                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 6):
+                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 8):
     """Run ``crimp`` (a :class:`~fabmd.protocols.crimp.Crimp` with ``target_tension``)
     until each family's mean yarn tension is within ``tolerance`` of its target."""
     targets = target_tensions_n(crimp.target_tension, model)
@@ -108,7 +109,20 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
             else:
                 slope = -stiffness[f]
             step[f] = (targets[f] - got[f]) / slope
-        expansion = {f: float(np.clip(expansion[f] + step[f], -0.45, 0.45)) for f in fams}
+        new = {}
+        for f in fams:
+            e = float(np.clip(expansion[f] + step[f], -0.45, 0.45))
+            # once the target is bracketed (tension falls as the expansion rises), stay
+            # inside the bracket: bisect where the secant would leave it (the response
+            # turns steep where slack yarns go taut)
+            below = [r["expansion"][f] for r in tried if r["yarn_tension_n"][f] < targets[f]]
+            above = [r["expansion"][f] for r in tried if r["yarn_tension_n"][f] > targets[f]]
+            if below and above:
+                lo, hi = max(above), min(below)  # expansions: more tension at lo
+                if not lo < e < hi:
+                    e = 0.5 * (lo + hi)
+            new[f] = e
+        expansion = new
     error, result = best
     search = {"targets_n": targets, "tolerance": tolerance, "runs": tried,
               "reached": error <= tolerance}
