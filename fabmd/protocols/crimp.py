@@ -41,7 +41,7 @@ from ..results.trajectory import finalise, salvage
 from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
-from ..scene.quasi_static import Damping, QuasiStatic
+from ..scene.quasi_static import Damping, QuasiStatic, relaxation_settled
 from ..scene.templates import fmt, render
 from .common import DATA_FILE, overlap_summary, run_folder, scene_dict, write_run_folder
 
@@ -286,8 +286,10 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     crimped.info = dict(crimped.info, crimp={"expansion": crimp.expansion})
     crimped.save(run_dir, stem=CRIMPED)
     qs = crimp.quasi_static
-    settled = bool(raw["ke_ratio"][-1] < qs.kinetic_ratio
-                   and raw["force_ratio"][-1] < qs.force_ratio)
+    # the halt fires on a check step, which the last history line may precede: trust it
+    settled = bool(relaxation_settled(run_dir / "log.lammps")
+                   or (raw["ke_ratio"][-1] < qs.kinetic_ratio
+                       and raw["force_ratio"][-1] < qs.force_ratio))
     steps = int(raw["step"][-1])
     history = {"step": raw["step"], "kinetic_energy_j": raw["kinetic_j"],
                "strain_energy_j": raw["strain_energy_j"],
