@@ -19,7 +19,7 @@ from fabmd.protocols.picture_frame import (
     shear_angle_from_displacement_deg,
     shear_force_n,
 )
-from fabmd.results.curves import tangent_intersection
+from fabmd.results.curves import locking_angle, tangent_intersection
 
 from .fabrics import parallel_fibres, plain_weave_cell
 
@@ -134,10 +134,23 @@ def test_force_stays_low_then_locks(frictional):
 
 
 @pytest.mark.lammps
+def test_locking_angle_does_not_depend_on_where_the_test_stops(frictional):
+    c = frictional.curve
+    g, f = c["shear_angle_deg"], c["normalised_force_n_m"]
+    angles = [locking_angle(g[g <= cut], f[g <= cut])["x"] for cut in (50, 55, 60)]
+    assert None not in angles and max(angles) - min(angles) < 1.0
+    assert frictional.summary["locking_angle_deg"] == pytest.approx(angles[-1])
+
+
+@pytest.mark.lammps
 def test_picture_frame_is_quasi_static_and_balances_energy(frictional):
     s = frictional.summary
     assert s["max_kinetic_to_strain_energy"] < 0.05
     assert s["energy_balance"]["relative_error"] < 0.05
+    # every 5° of shear judged on its own, and all of them pass
+    intervals = s["quasi_static_intervals"]["intervals"]
+    assert len(intervals) == 12 and all(i["ok"] for i in intervals), intervals
+    assert s["quasi_static"]["ok"]
     files = {p.name for p in frictional.run_dir.iterdir()}
     assert {"curve.csv", "curve.png", "summary.json", "trajectory.h5", "trajectory.pvd",
             "in.picture_frame"} <= files

@@ -20,6 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args) -> int:
     from ..pipeline import run_crimp
+    from ..results.yarn_tension import tension_line
     scene = scene_from(args)
     result = run_crimp(scene, args.out, engine=engine_from(args), overwrite=args.overwrite,
                        form=args.form)
@@ -37,6 +38,7 @@ def run(args) -> int:
             f"  crimp per fibre {crimps}\n"
             f"  fibre volume fraction {cr['fibre_volume_fraction']:.3f}\n"
             f"  {_datasheet_line(s)}\n"
+            f"  {tension_line(s.get('yarn_tension') or {})}\n"
             f"  results in {result.run_dir}")
     emit(s, args.json, text)
     return 0

@@ -72,8 +72,10 @@ def run(args) -> int:
     frame = run_test(scene, "picture-frame", out / "picture_frame", engine=engine,
                      crimped=out / "crimp")
     f = frame["test_summary"]
+    lock = f["locking_angle_deg"]
+    lock = f"{lock:.1f} deg" if lock is not None else "none found"  # the test may stop first
     say(f"4. picture frame ({frame['coupon_beads']} beads, {f['wall_s']:.0f} s): locking angle "
-        f"{f['locking_angle_deg']:.1f} deg, max normalised force "
+        f"{lock}, max normalised force "
         f"{f['max_normalised_force_n_m']:.4g} N/m; energy balance "
         f"{100 * f['energy_balance']['relative_error']:.2f} % "
         f"-> picture_frame/picture_frame/curve.png")

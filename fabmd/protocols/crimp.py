@@ -12,7 +12,8 @@ steps.
 
 Outputs in the run folder: ``crimped.data`` + ``crimped.json`` (the as-woven
 bead model, reusable by the test protocols), ``history.dat``/``history.csv``,
-``summary.json`` (loose and crimped measures), ``history.png``,
+``summary.json`` (loose and crimped measures, the yarn tension per family in N and
+cN/tex: :mod:`fabmd.results.yarn_tension`), ``history.png``,
 ``sections.png`` (top view and cuts along warp and weft), ``cuts/`` (one image and CSV
 per cut plane and the overview ``cuts.png``) and the
 trajectory of the ramp and the relaxation (``trajectory.h5``, ParaView files; the
@@ -41,6 +42,7 @@ from ..results.plots import plot_curves
 from ..results.preview import preview_png
 from ..results.run_record import RunEnd, read_run_end
 from ..results.trajectory import finalise, salvage
+from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import Damping, QuasiStatic
@@ -74,6 +76,11 @@ class Crimp:
         time_step: time-step policy.
         ramp_transits: ramp duration in axial wave-transit times of the longest fibre.
         samples: history lines written.
+        target_tension: the yarn tension the crimped fabric should carry, per family
+            (``{"warp": "1 cN/tex", "weft": "4 N"}``) or one for all: N per yarn or
+            cN/tex; the expansion of those families is then searched for it
+            (:mod:`fabmd.protocols.crimp_tension`; ``expansion`` is the start). None:
+            the expansion as given, whatever tension it leaves (reported either way).
         trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
             stops once quasi-static, so frames are spread over :meth:`expected_steps`
             (the ramp and a quarter of the relaxation budget); the crimped state is
@@ -89,6 +96,7 @@ class Crimp:
     ramp_transits: float = 40.0
     samples: int = 200
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
+    target_tension: dict | str | float | None = None
 
     def __post_init__(self):
         if not isinstance(self.expansion, dict):
@@ -100,6 +108,10 @@ class Crimp:
         inputs.positive("crimp.ramp_transits", self.ramp_transits)
         inputs.positive_int("crimp.samples", self.samples, minimum=2)
         check_trajectory("crimp.trajectory", self.trajectory)
+        if self.target_tension is not None:
+            from .crimp_tension import check_target_tension
+
+            check_target_tension(self.target_tension)
 
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
@@ -224,9 +236,15 @@ class Crimp:
 
         ``resume``: continue the interrupted crimp in ``out`` from its checkpoint. A shrink
         beyond a family's loose crimp is warned about (``UserWarning``) and listed in the
-        summary's ``shrink_warnings``.
+        summary's ``shrink_warnings``. With ``target_tension``, several crimp runs search
+        the expansion for it (not resumable: a resume starts the search again).
         """
         engine = engine or Engine()
+        if self.target_tension is not None:
+            from .crimp_tension import crimp_to_tension
+
+            self.check_model(model)
+            return crimp_to_tension(self, model, out, engine=engine, overwrite=overwrite)
         shrink = self.shrink_warnings(model)
         if mpi.is_root():
             for message in shrink:
@@ -359,5 +377,7 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
         "pass_through": passed_through(loose, crimped),
         "areal_density_kg_m2": areal_density_kg_m2(crimped),
         "datasheet": loose.info.get("datasheet"),
+        # the tension the crimp leaves in the yarns (N per yarn, cN/tex), per family
+        "yarn_tension": yarn_tension(crimped),
     }
     return crimped, summary

@@ -2,8 +2,10 @@
 
 A driven test (tension, picture frame, bias extension, periodic cells) moves a
 boundary — clamps or the periodic box — at a constant speed reached by a smooth
-start (:class:`~fabmd.scene.loading.SmoothStartSpeed`), damps the free beads
-viscously (γ = m/τ) and writes, through ``lammps_templates/driven_outputs.lmp``:
+start (:class:`~fabmd.scene.loading.SmoothStartSpeed`), damps the free beads with a
+drag γ = m/τ on their motion relative to the tools' affine velocity field
+(:mod:`fabmd.scene.drag`; protocols without ``drag`` damp the absolute velocity) and
+writes, through ``lammps_templates/driven_outputs.lmp``:
 
 * ``means.dat`` — forces and powers averaged over each output interval (exact
   integrals of the external and the damping power);
@@ -43,10 +45,11 @@ from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
 from ..results.trajectory import finalise, salvage
 from ..scene import blocks
+from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import check_trajectory
-from ..scene.quasi_static import relaxation_settled
+from ..scene.quasi_static import interval_columns, interval_verdict, relaxation_settled
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
 
@@ -73,6 +76,7 @@ class DrivenResult(RunResult):
     def plot(self) -> None:
         for spec in self.plots:
             spec = dict(spec)
+            spec.pop("x_column", None), spec.pop("x_scale", None)  # for mark_plots only
             plot_curves(self.run_dir / spec.pop("path"), **spec)
 
 
@@ -90,6 +94,8 @@ class DrivenTest:
     rate_keys: ClassVar[dict[str, str]] = {}
     #: the quasi-static measures judged after the run (summary key -> largest allowed)
     quasi_static_limits: ClassVar[dict[str, float]] = QUASI_STATIC_LIMITS
+    #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
+    interval_axis: ClassVar[tuple[str, float] | None] = None
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -152,6 +158,12 @@ class DrivenTest:
         tau = self.damping_time_s or self.duration_s(model) / 10
         return float(np.median(model.masses)) / tau
 
+    def drag_block(self, model: BeadModel, field: AffineField) -> tuple[str, str]:
+        """(LAMMPS text, per-bead damping power) of the drag on the free beads: relative to
+        the tools' affine velocity ``field`` (``drag = "affine"``) or on the absolute
+        velocity (``"absolute"``); :mod:`fabmd.scene.drag`."""
+        return drag_commands(getattr(self, "drag", "absolute"), "free", self.gamma(model), field)
+
     def check_loading(self) -> None:
         """Validate the fields every driven test has (speed, ramp, damping time, samples,
         trajectory); errors name ``<protocol>.<field>``."""
@@ -162,6 +174,8 @@ class DrivenTest:
             inputs.positive(f"{name}.damping_time_s", self.damping_time_s)
         inputs.positive_int(f"{name}.samples", self.samples, minimum=10)
         check_trajectory(f"{name}.trajectory", self.trajectory)
+        if hasattr(self, "drag"):
+            inputs.one_of(f"{name}.drag", self.drag, DRAG_KINDS)
 
     def scene_text(self, model: BeadModel, dt: float, protocol_text: str, *extra: str,
                    after: tuple[str, ...] | None = None) -> str:
@@ -199,12 +213,17 @@ class DrivenTest:
 
     def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
                       mean_values: str = "", mean_names: str = "", print_values: str = "",
-                      print_names: str = "", thermo_values: str = "") -> str:
-        """Interval means, printed curve and thermo (``driven_outputs.lmp``)."""
+                      print_names: str = "", thermo_values: str = "",
+                      damping_power: str | None = None) -> str:
+        """Interval means, printed curve and thermo (``driven_outputs.lmp``);
+        ``damping_power``: the drag's power per free bead (default: that of a drag
+        γ·v on the absolute velocity)."""
         every = self.every(model)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
+        if damping_power is None:
+            damping_power = f"{self.gamma(model):.10g}*(vx*vx+vy*vy+vz*vz)"
         return render("driven_outputs", external_power=external_power, strain_energy=strain,
-                      external_ref=external_ref, gamma=self.gamma(model), every=every,
+                      external_ref=external_ref, damping_power=damping_power, every=every,
                       mean_values=mean_values, mean_names=mean_names,
                       print_values=print_values, print_names=print_names,
                       thermo_values=thermo_values,
@@ -249,14 +268,17 @@ class DrivenTest:
             spike = start_spike_ratio(result.curve.get(self.rate_curve[1]))
             if spike is not None:
                 result.summary["start_spike_ratio"] = spike
+            if self.interval_axis is not None:
+                add_interval_verdict(result, *self.interval_axis)
             verdict = quasi_static_verdict(result.summary, self.quasi_static_limits)
             result.summary["quasi_static"] = verdict
             if not verdict["ok"]:
-                for spec in getattr(result, "plots", []):  # no plot that looks valid
-                    spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
-                    spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"]])
+                mark_plots(result, verdict, self.interval_axis)
+                where = ("; trust only " + ", ".join(f"{a:g}-{b:g}" for a, b in
+                                                     verdict["trusted"])
+                         if verdict.get("partly") else ": do not use the curve")
                 warnings.warn(f"{self.protocol} in {run_dir}: not quasi-static "
-                              f"({'; '.join(verdict['problems'])}): do not use the curve; "
+                              f"({'; '.join(verdict['problems'])}){where}; "
                               f"{'; '.join(verdict['remedies'])}", QuasiStaticWarning,
                               stacklevel=2)
         if check_rate:
@@ -298,7 +320,10 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
     ``limits`` (default
     :data:`QUASI_STATIC_LIMITS`) is read from the summary (``damping_share`` computed from
     its energy balance); a measure the test does not report is not judged. A summary whose
-    ``start_settled`` is False (the relaxation before the loading did not settle) fails."""
+    ``start_settled`` is False (the relaxation before the loading did not settle) fails.
+    With a per-interval verdict (``quasi_static_intervals``, :func:`add_interval_verdict`)
+    every failed interval is a problem too; ``partly`` is True when only intervals failed
+    and some passed (``trusted``: their ranges), so the rest of the curve can be used."""
     limits = QUASI_STATIC_LIMITS if limits is None else limits
     derived = {"damping_share": lambda: damping_share(summary),
                "energy_balance_error": lambda: (summary.get("energy_balance") or {}).get(
@@ -312,10 +337,20 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
         problems.append("the specimen was still moving when the loading started (its "
                         "relaxation did not settle within relax.max_steps)")
         failed.append("start_settled")
+    intervals = summary.get("quasi_static_intervals")
+    whole_run_ok = not problems
+    trusted = flagged = []
+    if intervals:
+        trusted, flagged = intervals["trusted"], intervals["flagged"]
+        interval_problems = [p for i in intervals["intervals"] for p in i["problems"]]
+        problems += interval_problems
+        if interval_problems:
+            failed.append("interval")
     remedies = list(dict.fromkeys(f"{name}: {QUASI_STATIC_REMEDIES.get(name, GENERIC_REMEDY)}"
                                   for name in failed))
     return {"ok": not problems, "values": values, "limits": dict(limits),
-            "problems": problems, "remedies": remedies}
+            "problems": problems, "remedies": remedies, "flagged": flagged,
+            "trusted": trusted, "partly": bool(whole_run_ok and flagged and trusted)}
 
 
 GENERIC_REMEDY = "lower speed_fraction, or check the specimen holds together"
@@ -337,6 +372,8 @@ QUASI_STATIC_REMEDIES = {
     "start_settled": "the specimen was not at rest when the loading started: raise "
                      "relax.max_steps (or lower relax.kinetic_ratio); a lower speed_fraction "
                      "does not cure it",
+    "interval": "part of the curve is not quasi-static (the flagged intervals): lower "
+                "speed_fraction, or use only the trusted ranges",
 }
 
 
@@ -354,6 +391,37 @@ def start_spike_ratio(force, fraction: float = 0.05) -> float | None:
     later = float(f[head:].max())
     early = float(f[1:head].max())
     return early / max(later, 1e-300) if early > 0 else 0.0
+
+
+def add_interval_verdict(result: DrivenResult, column: str, width: float) -> dict:
+    """Judge ``result``'s curve per interval of ``column`` (:func:`~fabmd.scene.
+    quasi_static.interval_verdict`): the verdict goes into the summary
+    (``quasi_static_intervals``), its per-sample columns into the curve."""
+    c = result.curve
+    verdict = interval_verdict(c[column], c["external_work_j"], c["damping_dissipation_j"],
+                               c["kinetic_energy_j"], c["strain_energy_j"], width,
+                               name=column)
+    result.summary["quasi_static_intervals"] = verdict
+    result.curve.update(interval_columns(c[column], verdict))
+    return verdict
+
+
+def mark_plots(result: DrivenResult, verdict: dict,
+               interval_axis: tuple[str, float] | None) -> None:
+    """Say on every plot that the curve is not (or only partly) quasi-static: a
+    whole-run failure in the title, failed intervals shaded (a plot spec whose x is not
+    the interval column names its own: ``x_column``, ``x_scale``)."""
+    for spec in getattr(result, "plots", []):
+        if verdict.get("partly") and interval_axis is not None:
+            column = spec.get("x_column", interval_axis[0])
+            scale = spec.get("x_scale", 1.0)
+            axis = result.curve[interval_axis[0]]
+            spec["spans"] = [[scale * float(np.interp(v, axis, result.curve[column]))
+                              for v in ab] for ab in verdict["flagged"]]
+            spec["title"] = "PARTLY NOT QUASI-STATIC (shaded): " + spec.get("title", "")
+        else:  # no plot that looks valid
+            spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
+        spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"][:4]])
 
 
 def relative_change(a, b) -> float | None:

@@ -14,8 +14,11 @@ follows from the power balance F·ḋ = −Σ_clamped f·v, integrated exactly o
 output interval: F = ΔW/Δd. Reported the standard way (Harrison et al. 2004):
 F_s = F/(2 cos θ) and F_norm = F_s·L_frame/L_fabric², L_fabric the side of the
 fabric in the frame (in this model the clamped strips shear with the frame, so
-the whole coupon is the sheared area). The shear-locking angle is where the
-tangents of the low initial part and the steep final part of F_norm(γ) meet.
+the whole coupon is the sheared area). The shear-locking angle
+(:func:`fabmd.results.curves.locking_angle`): a line fitted to F_norm over a fixed
+initial range (5–15°), the departure where F_norm stays above twice that line for 5°,
+and the tangent over those 5° meeting the initial line; it does not depend on where
+the test stops.
 
 ``pretension_strain`` is a clamping preload: the rest length of the bonds of the
 unclamped fibres shrinks by that strain (ramped, clamps held) before the free
@@ -37,9 +40,10 @@ from ..errors import InputError
 from ..model.bead_model import BeadModel, BondType
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
-from ..results.curves import tangent_intersection, values_at
+from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..results.figure import report_marks
+from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
@@ -120,8 +124,12 @@ class PictureFrame(DrivenTest):
             (default 1e-3: on the example coupon halving it changes the curve by < 0.1 %;
             check with ``check_rate``).
         ramp_fraction: share of the test spent reaching full speed smoothly.
-        damping_time_s: τ of the viscous damping γ = m/τ of the free fabric (default:
-            a tenth of the test).
+        damping_time_s: τ of the drag γ = m/τ on the free fabric (default: a tenth of
+            the test).
+        drag: ``"affine"`` (default): the drag acts on the motion relative to the frame's
+            affine velocity field, so it does not add to the frame force;
+            ``"absolute"``: on the absolute velocity (the old ``fix viscous``, which the
+            frame force then contains). :mod:`fabmd.scene.drag`.
         contact: fibre–fibre contact.
         time_step: time-step policy.
         samples: curve points.
@@ -130,6 +138,10 @@ class PictureFrame(DrivenTest):
             (``TrajectoryOutput(frames=0)``: none written, none measured).
         report_angles_deg: shear angles at which forces are reported.
         relax: stop criterion of the free relaxation before the test (clamps held).
+        locking_initial_deg: shear-angle range [deg] of the initial branch of the
+            locking-angle method (:func:`fabmd.results.curves.locking_angle`).
+        locking_factor: the force over the initial line that marks the departure
+            from it (> 1).
     """
 
     max_shear_angle_deg: float = 60.0
@@ -141,14 +153,18 @@ class PictureFrame(DrivenTest):
     speed_fraction: float = 1e-3
     ramp_fraction: float = 0.1
     damping_time_s: float | None = None
+    drag: str = "affine"
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 200
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    locking_initial_deg: tuple[float, float] = (5.0, 15.0)
+    locking_factor: float = 2.0
 
     protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
     rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
     rate_keys: ClassVar[dict[str, str]] = {
         "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
@@ -169,6 +185,11 @@ class PictureFrame(DrivenTest):
         self.check_loading()
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
+        lo, hi = self.locking_initial_deg
+        inputs.in_range("picture_frame.locking_initial_deg[0]", lo, 0, 80)
+        inputs.in_range("picture_frame.locking_initial_deg[1]", hi, lo, 80, low_open=True)
+        inputs.in_range("picture_frame.locking_factor", self.locking_factor, 1, 100,
+                        low_open=True)
 
     # -- geometry ---------------------------------------------------------------------
     def frame(self, model: BeadModel) -> FrameGeometry:
@@ -293,9 +314,15 @@ class PictureFrame(DrivenTest):
         ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
+        ax, ay = fmt(g.pin_a[0]), fmt(g.pin_a[1])
+        damping, damping_power = self.drag_block(model, AffineField(
+            vx=f"v_frame_lxx*(x-({ax}))+v_frame_lxy*(y-({ay}))",
+            vy=f"v_frame_lxy*(x-({ax}))+v_frame_lxx*(y-({ay}))",
+            tools="frame"))
         outputs = self.outputs_block(model, power, power_ref, print_values="${d} ${shear_deg}",
                                      print_names="displacement_m shear_angle_lammps_deg",
-                                     thermo_values="v_d v_shear_deg c_p_ext")
+                                     thermo_values="v_d v_shear_deg c_p_ext",
+                                     damping_power=damping_power)
         text = render("picture_frame", frame_length=g.frame_length_m, ax=g.pin_a[0],
                       ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
                       y_hi=g.inner[3], pretension=self.pretension_block(model),
@@ -303,7 +330,7 @@ class PictureFrame(DrivenTest):
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
                       displacement_next=load.lammps_displacement("t_next"),
                       velocity_next=load.lammps_velocity("t_next"),
-                      gamma=self.gamma(model), outputs=outputs)
+                      damping=damping, outputs=outputs)
         return self.scene_text(model, dt, text)
 
     def reduce(self, run_dir: Path, model: BeadModel,
@@ -338,9 +365,12 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
              **energy_columns(out)}
     dmax = test.max_displacement(model)
     started = started_mask(out, test.loading(model), d / dmax)
-    valid = gamma > 0.02 * gamma.max()  # past the first, noisy intervals of the smooth start
-    lock = tangent_intersection(gamma[valid], fnorm[valid])
-    initial = tangent_intersection(np.radians(gamma[valid]), fnorm[valid])["initial_slope"]
+    # by a method that reads the curve only up to a little past locking (not the last part)
+    lock = locking_angle(gamma, fnorm, initial_deg=test.locking_initial_deg,
+                         factor=test.locking_factor)
+    # the initial branch's slope, per radian
+    initial = (None if lock["initial_slope"] is None
+               else float(np.degrees(lock["initial_slope"])))
     steps, fibre_gamma = fibre_shear_angles(run_dir, g.centre,
                                             (g.free_side_m / 4, g.free_side_m / 4))
     kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)

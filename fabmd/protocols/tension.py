@@ -23,10 +23,11 @@ from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep
 from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
+from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.quasi_static import QuasiStatic
-from ..scene.templates import render
+from ..scene.templates import fmt, render
 from .driven import (
     STARTED_NOTE,
     DrivenResult,
@@ -52,7 +53,9 @@ class Tension(DrivenTest):
         speed_fraction: speed of each clamp over the fibres' axial wave speed
             (quasi-static when small; default 2e-4).
         ramp_fraction: share of the test spent reaching full speed smoothly.
-        damping_time_s: τ of the viscous damping γ = m/τ (default: a tenth of the test).
+        damping_time_s: τ of the drag γ = m/τ (default: a tenth of the test).
+        drag: ``"affine"`` (default): drag on the motion relative to the clamps' affine
+            stretch field; ``"absolute"``: on the absolute velocity. :mod:`fabmd.scene.drag`.
         contact: fibre–fibre contact.
         time_step: time-step policy.
         samples: curve points.
@@ -67,6 +70,7 @@ class Tension(DrivenTest):
     speed_fraction: float = 1e-4
     ramp_fraction: float = 0.1
     damping_time_s: float | None = None
+    drag: str = "affine"
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 200
@@ -75,6 +79,7 @@ class Tension(DrivenTest):
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
     protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("elongation_pct", 0.25)
     rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
     rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n"}
 
@@ -118,14 +123,20 @@ class Tension(DrivenTest):
         ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
         ref_force *= 1e-3 * self.max_elongation_pct
         power, power_ref = clamp_power("clamps")
+        # the clamps' inner edges at x_left - u and x_right + u move at -v and +v: the
+        # fabric between them stretches affinely along x
+        damping, damping_power = self.drag_block(model, AffineField(
+            vx=f"v_v*(2*x-({fmt(left + right)}))/({fmt(right - left)}+2*v_u)", vy="0",
+            tools="clamps"))
         outputs = self.outputs_block(
             model, power, power_ref, mean_values="c_f_left c_f_right",
             mean_names="force_left_n force_right_n", print_values="${u}",
-            print_names="clamp_displacement_m", thermo_values="v_u c_f_left c_f_right")
+            print_names="clamp_displacement_m", thermo_values="v_u c_f_left c_f_right",
+            damping_power=damping_power)
         text = render("tension", x_left=left, x_right=right,
                       relax=self.relax_block(model, "clamps", "free", ref_force),
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
-                      gamma=self.gamma(model), outputs=outputs)
+                      damping=damping, outputs=outputs)
         return self.scene_text(model, dt, text, extra)
 
     def reduce(self, run_dir: Path, model: BeadModel,

@@ -96,3 +96,85 @@ def tangent_intersection(x, y, initial: tuple[float, float] = (0.05, 0.35),
     steep = p2[0] > 0 and p2[0] >= min_ratio * max(p1[0], 0.0)
     out["found"] = bool(steep and lo <= xb <= hi)
     return out
+
+
+#: the stated method of :func:`locking_angle` (README "Virtual tests")
+LOCKING_METHOD = ("initial branch: straight line fitted over {initial[0]:g}-{initial[1]:g} deg; "
+                  "departure: the first angle past it from which F_norm stays at least "
+                  "{factor:g} x that line for {window:g} deg; locking angle: where the "
+                  "tangent fitted over those {window:g} deg meets the initial line")
+
+
+def locking_angle(angle_deg, force, initial_deg: tuple[float, float] = (5.0, 15.0),
+                  factor: float = 2.0, window_deg: float = 5.0, min_ratio: float = 3.0,
+                  min_points: int = 3) -> dict:
+    """Shear-locking angle by a stated method that does not depend on where the test stops.
+
+    1. The initial branch: a straight line F_lin fitted to the points with angle in
+       ``initial_deg`` (a fixed range, past the start-up).
+    2. The departure γ_d: the first angle past that range from which the force stays at
+       or above ``factor`` × F_lin (and above F_lin + 3 × the fit's scatter) for
+       ``window_deg`` degrees.
+    3. The locking angle: where the straight line fitted over [γ_d, γ_d + ``window_deg``]
+       meets F_lin.
+
+    Only the curve up to γ_d + ``window_deg`` is read, so a test stopped anywhere past that
+    gives the same angle. ``found`` is False when the curve does not reach the initial
+    range, when no departure is confirmed before it ends (``reason`` says which), or
+    when the final slope is not ``min_ratio`` × the initial one.
+
+    Returns:
+        ``x``, ``y`` (the locking point), ``departure_x``, ``initial_slope``,
+        ``final_slope`` (force per degree), ``initial_range``, ``final_range``,
+        ``found``, ``reason`` and ``method`` (the text of the method with its numbers).
+    """
+    x, y = np.asarray(angle_deg, float), np.asarray(force, float)
+    order = np.argsort(x)
+    x, y = x[order], y[order]
+    out = {"x": None, "y": None, "departure_x": None, "initial_slope": None,
+           "final_slope": None, "initial_range": [float(initial_deg[0]), float(initial_deg[1])],
+           "final_range": None, "found": False, "reason": "",
+           "method": LOCKING_METHOD.format(initial=initial_deg, factor=factor,
+                                           window=window_deg)}
+    first = (x >= initial_deg[0]) & (x <= initial_deg[1])
+    if first.sum() < min_points or x.max() < initial_deg[1]:
+        out["reason"] = (f"the curve does not cover the initial range {initial_deg[0]:g}-"
+                         f"{initial_deg[1]:g} deg")
+        return out
+    p1 = np.polyfit(x[first], y[first], 1)
+    out["initial_slope"] = float(p1[0])
+    scatter = float(np.std(y[first] - np.polyval(p1, x[first])))
+    line = np.polyval(p1, x)
+    above = (y >= factor * line) & (y >= line + 3 * scatter) & (x > initial_deg[1])
+    departure = None
+    for k in np.flatnonzero(above):
+        end = x[k] + window_deg
+        if end > x[-1]:
+            break  # the test stopped before a departure could be confirmed
+        span = (x >= x[k]) & (x <= end)
+        if above[span].all():
+            departure = k
+            break
+    if departure is None:
+        out["reason"] = (f"no departure by {factor:g} x the initial line held for "
+                         f"{window_deg:g} deg before the curve ends at {x[-1]:.1f} deg")
+        return out
+    a, b = float(x[departure]), float(x[departure] + window_deg)
+    span = (x >= a) & (x <= b)
+    if span.sum() < min_points:
+        out["reason"] = f"fewer than {min_points} points in {a:.1f}-{b:.1f} deg"
+        return out
+    p2 = np.polyfit(x[span], y[span], 1)
+    out.update(departure_x=a, final_range=[a, b], final_slope=float(p2[0]))
+    if p2[0] - p1[0] <= 0:
+        out["reason"] = "the final tangent is not steeper than the initial line"
+        return out
+    xb = float((p1[1] - p2[1]) / (p2[0] - p1[0]))
+    out["x"], out["y"] = xb, float(np.polyval(p1, xb))
+    steep = p2[0] > 0 and p2[0] >= min_ratio * max(p1[0], 0.0)
+    out["found"] = bool(steep and initial_deg[0] <= xb <= b)
+    if not out["found"]:
+        out["reason"] = (f"final slope {p2[0]:.3g} < {min_ratio:g} x initial {p1[0]:.3g}"
+                         if not steep else f"the tangents meet at {xb:.1f} deg, outside "
+                         f"{initial_deg[0]:g}-{b:.1f}")
+    return out

@@ -76,7 +76,7 @@ def report_marks(values: dict, label: str = "report points") -> list[dict]:
 def side_panel(ax, notes: str = "", legend: bool = True) -> None:
     """Legend (top) and notes (bottom) in a panel right of ``ax``, outside its data."""
     if legend and any(h.get_label() and not h.get_label().startswith("_")
-                      for h in ax.get_lines() + ax.collections):
+                      for h in [*ax.get_lines(), *ax.collections, *ax.patches]):
         ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
                   frameon=False, fontsize=8)
     if notes:

@@ -27,16 +27,21 @@ def _pyplot():
 
 
 def curves_figure(series: list[dict], xlabel: str, ylabel: str, title: str = "",
-                  notes: str = "", marks: list[dict] | None = None):
+                  notes: str = "", marks: list[dict] | None = None,
+                  spans: list | None = None):
     """A matplotlib figure of one or more curves (for notebooks; see :func:`plot_curves`).
 
     Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``, ``lw``.
     Axis labels carry units, e.g. ``"strain [%]"``. Title, legend, notes and ``marks``
     (the summary's quantities on the curve) are laid out by :mod:`fabmd.results.figure`:
-    nothing covers the data.
+    nothing covers the data. ``spans``: [from, to] ranges of x shaded as not quasi-static
+    (the part of the curve not to trust).
     """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=figure.FIGSIZE_IN, layout="constrained")
+    for k, (a, b) in enumerate(spans or []):
+        ax.axvspan(a, b, color="tab:red", alpha=0.15, lw=0,
+                   label="not quasi-static" if k == 0 else None)
     for s in series:
         ax.plot(np.asarray(s["x"]), np.asarray(s["y"]), s.get("style", "-"),
                 label=s.get("label"), lw=s.get("lw", 1.6))
@@ -47,15 +52,16 @@ def curves_figure(series: list[dict], xlabel: str, ylabel: str, title: str = "",
 
 
 def plot_curves(path: Path, series: list[dict], xlabel: str, ylabel: str, title: str = "",
-                notes: str = "", marks: list[dict] | None = None) -> Path | None:
+                notes: str = "", marks: list[dict] | None = None,
+                spans: list | None = None) -> Path | None:
     """Plot one or more curves into ``path`` (rank 0 only).
 
     Each series is a dict with ``x``, ``y`` and optional ``label``, ``style``; ``marks``
-    see :mod:`fabmd.results.figure`.
+    see :mod:`fabmd.results.figure`; ``spans`` as for :func:`curves_figure`.
     """
     if not mpi.is_root():
         return None
-    fig = curves_figure(series, xlabel, ylabel, title, notes, marks)
+    fig = curves_figure(series, xlabel, ylabel, title, notes, marks, spans)
     return _save(fig, path)
 
 

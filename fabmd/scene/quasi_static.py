@@ -13,12 +13,18 @@ Quasi-static criterion (checked every ``check_every`` steps): the kinetic energy
 is below ``kinetic_ratio`` × (bond strain energy + a floor: the bonds' energy at
 the reference force) AND the largest force on a free bead is below
 ``force_ratio`` × a reference force (the largest fibre tension the stage imposes).
+
+A driven test's curve is judged interval by interval (:func:`interval_verdict`): the
+drag's and the kinetic energy's share of the work done in each interval and KE/U there,
+so a curve whose first part is drag is flagged there even when the run as a whole passes.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from .. import inputs
 from .templates import render
@@ -111,3 +117,108 @@ def relaxation_settled(log_path) -> bool | None:
         return None
     with path.open(errors="replace") as f:
         return any(SETTLED_MESSAGE in line for line in f)
+
+
+# -- the quasi-static verdict per interval of a driven test's curve ---------------------
+#: above these an interval of a driven test's curve is not quasi-static: the share of the
+#: interval's external work the drag took and the share that went into kinetic energy
+#: (each is about the relative error of the force there), and the largest kinetic over
+#: strain energy in it (as for the whole run)
+INTERVAL_LIMITS = {"damping_share": 0.1, "inertia_share": 0.1,
+                   "kinetic_to_strain_energy": 0.1}
+
+
+def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: float,
+                     limits: dict[str, float] | None = None, name: str = "x") -> dict:
+    """Judge a driven test's curve interval by interval.
+
+    The range of ``x`` (the test's progress: shear angle [deg], elongation [%];
+    increasing) is cut into intervals ``width`` wide from 0. For each interval:
+
+    * ``damping_share`` = ΔW_drag / ΔW_external: the drag's share of the work done in it;
+    * ``inertia_share`` = |ΔKE| / ΔW_external: the share that went into kinetic energy;
+    * ``kinetic_to_strain_energy``: the largest KE / U at the samples in it, U no less
+      than 1 % of the run's largest strain energy (a slack start has almost none).
+
+    The cumulative works are read at the interval's ends by interpolation. A share
+    whose interval took no external work (|ΔW| below 1e-9 of the run's) is not
+    judged (None). An interval fails when a measure exceeds ``limits``
+    (default :data:`INTERVAL_LIMITS`).
+
+    Returns:
+        ``axis`` (``name``), ``width``, ``limits``, ``intervals`` (a list of dicts:
+        ``from``, ``to``, the measures, ``ok``, ``problems``), ``flagged`` and
+        ``trusted`` (lists of [from, to] of failed and passed intervals, neighbours
+        merged).
+    """
+    limits = INTERVAL_LIMITS if limits is None else limits
+    x = np.asarray(x, float)
+    w_ext, w_drag, ke, u = (np.asarray(a, float) for a in (external_work_j, damping_j,
+                                                            kinetic_j, strain_j))
+    if width <= 0:
+        raise ValueError(f"interval width must be > 0, got {width}")
+    top = float(x.max())
+    if top <= 0:
+        return {"axis": name, "width": float(width), "limits": dict(limits),
+                "intervals": [], "flagged": [], "trusted": []}
+    edges = np.arange(0.0, top, width)
+    edges = np.append(edges, top) if top > edges[-1] else edges
+    floor = 1e-9 * max(float(np.abs(w_ext).max()), 1e-300)
+    u_floor = max(0.01 * float(u.max()), 1e-300)
+    intervals = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if b - a < 1e-6 * width:
+            continue
+        dw = float(np.diff(np.interp([a, b], x, w_ext))[0])
+        ddrag = float(np.diff(np.interp([a, b], x, w_drag))[0])
+        dke = float(np.diff(np.interp([a, b], x, ke))[0])
+        inside = (x >= a) & (x <= b)
+        at = np.interp([a, b], x, ke), np.interp([a, b], x, u)
+        kes = np.concatenate([ke[inside], at[0]])
+        us = np.concatenate([u[inside], at[1]])
+        measures = {
+            "damping_share": ddrag / dw if abs(dw) > floor else None,
+            "inertia_share": abs(dke) / abs(dw) if abs(dw) > floor else None,
+            "kinetic_to_strain_energy": float(np.max(kes / np.maximum(us, u_floor))),
+        }
+        problems = [f"{name} {a:g}-{b:g}: {k} = {v:.2g} > {limits[k]:g}"
+                    for k, v in measures.items()
+                    if k in limits and v is not None and v > limits[k]]
+        intervals.append({"from": float(a), "to": float(b), **measures,
+                          "ok": not problems, "problems": problems})
+    return {"axis": name, "width": float(width), "limits": dict(limits),
+            "intervals": intervals,
+            "flagged": _merge([(i["from"], i["to"]) for i in intervals if not i["ok"]]),
+            "trusted": _merge([(i["from"], i["to"]) for i in intervals if i["ok"]])}
+
+
+def _merge(ranges: list[tuple[float, float]]) -> list[list[float]]:
+    """Join touching [from, to] ranges (in order)."""
+    out: list[list[float]] = []
+    for a, b in ranges:
+        if out and abs(out[-1][1] - a) < 1e-12 * max(1.0, abs(a)):
+            out[-1][1] = b
+        else:
+            out.append([a, b])
+    return out
+
+
+def interval_columns(x, verdict: dict) -> dict[str, np.ndarray]:
+    """Per-sample columns of an interval verdict for ``curve.csv``: each sample carries
+    the measures of the interval it lies in (NaN where not judged) and
+    ``interval_quasi_static`` (1 or 0)."""
+    x = np.asarray(x, float)
+    intervals = verdict["intervals"]
+    keys = ("damping_share", "inertia_share", "kinetic_to_strain_energy")
+    cols = {f"interval_{k}": np.full(len(x), np.nan) for k in keys}
+    cols["interval_quasi_static"] = np.ones(len(x))
+    if not intervals:
+        return cols
+    starts = np.array([i["from"] for i in intervals])
+    index = np.clip(np.searchsorted(starts, x, side="right") - 1, 0, len(intervals) - 1)
+    for n, i in enumerate(index):
+        iv = intervals[i]
+        for k in keys:
+            cols[f"interval_{k}"][n] = np.nan if iv[k] is None else iv[k]
+        cols["interval_quasi_static"][n] = 1.0 if iv["ok"] else 0.0
+    return cols

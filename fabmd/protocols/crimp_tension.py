@@ -1,0 +1,142 @@
+"""Crimp to a stated yarn tension: adjust the rest-length change per family until the
+crimped fabric carries the target tension.
+
+A target is given per family (or one for all) as N per yarn (a number or ``"5 N"``)
+or as ``"1 cN/tex"`` (the model must know the family's linear density). Each family's
+tension after crimp falls as its expansion α·ΔT rises; the search starts from the
+scene's expansion, takes a first step with the yarn's axial stiffness
+(ΔT_yarn ≈ −n_fibres·E·A·Δ(α·ΔT), the stiffest the response can be) and then secant
+steps (bisection once the target is bracketed and a secant step would leave the
+bracket), all families at once, until every family is within ``tolerance`` of its target
+(default 5 %) or ``max_runs`` (8) crimp runs are spent (then it warns and keeps the
+closest). Every run overwrites the crimp folder; the last one stays, and its
+``summary.json`` → ``tension_search`` lists the expansions tried and the tensions they
+gave.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .. import units
+from ..engine import mpi
+from ..errors import InputError
+from ..model.bead_model import BeadModel
+from ..results.folder import write_json
+
+_CN_PER_TEX = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*cN/tex\s*$")
+
+
+def check_target_tension(target) -> None:
+    """Validate ``Crimp.target_tension`` without a model (units, sign, shape)."""
+    values = target.items() if isinstance(target, dict) else [("", target)]
+    for fam, value in values:
+        name = f"crimp.target_tension{'.' + fam if fam else ''}"
+        match = _CN_PER_TEX.match(value) if isinstance(value, str) else None
+        number = float(match.group(1)) if match else units.quantity(value, "force", name)
+        if not number > 0:
+            raise InputError(f"{name} must be > 0 (N per yarn or cN/tex), got {value!r}")
+
+
+def target_tensions_n(target, model: BeadModel) -> dict[str, float]:
+    """The target tension per family in N per yarn, from ``Crimp.target_tension``."""
+    if not isinstance(target, dict):
+        target = {fam: target for fam in model.family_names}
+    unknown = set(target) - set(model.family_names)
+    if unknown:
+        raise InputError(f"crimp.target_tension names families {sorted(unknown)} that the "
+                         f"fabric does not have (it has {list(model.family_names)})")
+    families = (model.info or {}).get("families", {})
+    out = {}
+    for fam, value in target.items():
+        name = f"crimp.target_tension.{fam}"
+        match = _CN_PER_TEX.match(value) if isinstance(value, str) else None
+        if match:
+            tex = families.get(fam, {}).get("linear_density_tex")
+            if not tex:
+                raise InputError(f"{name} = {value!r} needs the yarn's linear density, which "
+                                 f"this model does not carry; give the tension in N per yarn")
+            newtons = float(match.group(1)) * tex / 100.0
+        else:
+            newtons = units.quantity(value, "force", name)
+        if not newtons > 0:
+            raise InputError(f"{name} must be > 0, got {value!r}")
+        out[fam] = newtons
+    return out
+
+
+def yarn_axial_stiffness_n(model: BeadModel, family: str) -> float:
+    """n_fibres·E·A of a yarn of ``family`` (mean over its yarns) [N]."""
+    ea = [bt.axial_stiffness_n for bt in model.fibre_bond_types() if bt.family == family]
+    yarns = [k + 1 for k, y in enumerate(model.yarns) if y.family == family]
+    per_yarn = np.bincount(model.fibre_yarn, minlength=len(model.yarns) + 1)[yarns]
+    return float(np.mean(ea)) * float(per_yarn.mean())
+
+
+def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
+                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 8):
+    """Run ``crimp`` (a :class:`~fabmd.protocols.crimp.Crimp` with ``target_tension``)
+    until each family's mean yarn tension is within ``tolerance`` of its target."""
+    targets = target_tensions_n(crimp.target_tension, model)
+    fams = sorted(targets)
+    stiffness = {f: yarn_axial_stiffness_n(model, f) for f in fams}
+    expansion = {f: float(crimp.expansion.get(f, 0.0)) for f in fams}
+    tried: list[dict] = []
+    best = None
+    for run in range(max_runs):
+        stage = dataclasses.replace(crimp, target_tension=None,
+                                    expansion={**crimp.expansion, **expansion})
+        result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0)
+        got = {f: result.summary["yarn_tension"][f]["yarn_n"] for f in fams}
+        error = max(abs(got[f] / targets[f] - 1) for f in fams)
+        tried.append({"expansion": dict(expansion), "yarn_tension_n": got,
+                      "largest_relative_error": error})
+        if best is None or error <= best[0]:
+            best = (error, result)
+        if error <= tolerance:
+            break
+        step = {}
+        for f in fams:
+            if len(tried) >= 2 and tried[-1]["expansion"][f] != tried[-2]["expansion"][f]:
+                de = tried[-1]["expansion"][f] - tried[-2]["expansion"][f]
+                dt = tried[-1]["yarn_tension_n"][f] - tried[-2]["yarn_tension_n"][f]
+                slope = dt / de if dt / de < 0 else -stiffness[f]  # secant, if it falls
+            else:
+                slope = -stiffness[f]
+            step[f] = (targets[f] - got[f]) / slope
+        new = {}
+        for f in fams:
+            e = float(np.clip(expansion[f] + step[f], -0.45, 0.45))
+            # once the target is bracketed (tension falls as the expansion rises), stay
+            # inside the bracket: bisect where the secant would leave it (the response
+            # turns steep where slack yarns go taut)
+            below = [r["expansion"][f] for r in tried if r["yarn_tension_n"][f] < targets[f]]
+            above = [r["expansion"][f] for r in tried if r["yarn_tension_n"][f] > targets[f]]
+            if below and above:
+                lo, hi = max(above), min(below)  # expansions: more tension at lo
+                if not lo < e < hi:
+                    e = 0.5 * (lo + hi)
+            new[f] = e
+        expansion = new
+    error, result = best
+    search = {"targets_n": targets, "tolerance": tolerance, "runs": tried,
+              "reached": error <= tolerance}
+    if error > tolerance:
+        if tried[-1]["largest_relative_error"] != error:  # rerun the closest for the folder
+            closest = next(t for t in tried if t["largest_relative_error"] == error)
+            result = dataclasses.replace(crimp, target_tension=None, expansion={
+                **crimp.expansion, **closest["expansion"]}).run(model, out, engine=engine,
+                                                                overwrite=True)
+        warnings.warn(f"crimp: the yarn tension did not reach its target within "
+                      f"{100 * tolerance:g} % in {max_runs} runs (closest: "
+                      f"{100 * error:.1f} % off); see summary.json tension_search",
+                      stacklevel=3)
+    result.summary["tension_search"] = search
+    if mpi.is_root():
+        write_json(Path(result.run_dir) / "summary.json", result.summary)
+    return result
