@@ -9,7 +9,7 @@ Sections fabmd owns (unknown keys in them are refused, naming the key)::
     [yarns.binder]   (3D architectures only)
     [materials.NAME] FibreMaterial fields: modulus_pa, density_kg_m3
     [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor
-    [contact]        ContactModel fields: friction, normal, stiffness_factor, ...
+    [contact]        ContactModel fields: friction, normal, normal_stiffness_pa, ...
 
 Every other top-level table (``[crimp]``, ``[tension]``, ``[picture_frame]``,
 ``[drape]``, ...) is kept as a raw dict in :attr:`Scene.protocols` for the
