@@ -54,3 +54,14 @@ def test_thickness_falls_monotonically_with_pressure(tmp_path):
     assert set(curve) >= {"pressure_pa", "thickness_m", "phase"}
     assert (curve["phase"] < 0).any()  # it unloaded
     assert (tmp_path / "c" / "curve.png").exists()
+
+
+def test_scene_table_and_contact_reach_the_protocol():
+    from fabmd.pipeline import build_protocol
+
+    c = build_protocol("compaction", {"max_pressure_pa": "150 kPa",
+                                      "datasheet_pressure_pa": "100 kPa",
+                                      "tool": {"friction": 0.1}},
+                       contact=ContactModel(normal_stiffness_pa="1 GPa"))
+    assert c.max_pressure_pa == 1.5e5 and c.datasheet_pressure_pa == 1e5
+    assert c.contact.normal_stiffness_pa == 1e9 and c.tool.friction == 0.1
