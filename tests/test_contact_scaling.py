@@ -110,3 +110,18 @@ def test_crossing_is_a_point_contact_that_scales_with_the_spacing():
     fine = crossing_force_n(K_LINE, 0.25 * D, D, overlap)
     assert coarse == pytest.approx(K_LINE * 0.5 * D * overlap)
     assert fine / coarse == pytest.approx(0.5)
+
+
+def test_stable_time_step_follows_the_contact_the_same_way_at_any_spacing():
+    """k_n = k'·l0 and bead mass ∝ l0: the contact adds 6·k'/(ρA) to ω² at every spacing,
+    so the time step it costs (dt with contact / dt without) does not depend on s/d."""
+    contact = ContactModel(normal_stiffness_pa=K_LINE)
+    for s in (0.5, 0.25):
+        b = bead_parameters(FIBRE, Discretisation(s))
+        kn = contact.stability_stiffness_n_per_m([b])
+        added = b.omega_squared(kn) - b.omega_squared(0.0)
+        assert added == pytest.approx(6 * K_LINE / FIBRE.mass_per_length_kg_m, rel=1e-12)
+    hertz = ContactModel(normal="hertz", normal_stiffness_pa=K_LINE)
+    ratios = [hertz.stability_stiffness_n_per_m([bead_parameters(FIBRE, Discretisation(s))])
+              / (K_LINE * s * D) for s in (0.5, 0.25)]
+    assert ratios[0] == pytest.approx(ratios[1])

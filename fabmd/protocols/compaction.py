@@ -102,14 +102,14 @@ class Compaction:
 
     max_pressure_pa: float = 2e5
     datasheet_pressure_pa: float | None = None
-    speed_fraction: float = 2e-5
+    speed_fraction: float = 5e-5
     max_travel_fraction: float = 0.8
     local_damping: float = 0.7
-    settle_fraction: float = 0.1
+    settle_fraction: float = 0.02
     contact: ContactModel = field(default_factory=ContactModel)
     tool: ToolContact = field(default_factory=lambda: ToolContact(friction=0.2))
     time_step: TimeStep = field(default_factory=TimeStep)
-    samples: int = 400
+    samples: int = 2000
 
     protocol: ClassVar[str] = "compaction"
 
