@@ -108,3 +108,27 @@ def test_a_fibre_bundle_compacts_as_the_law_it_implements(tmp_path):
         if share == 1.0:  # at the reference state: the law's own pressure
             vf = bundle_volume_fraction(AREA, g)
             assert pyy == pytest.approx(GLASS_BUNDLE.pressure_pa(vf), rel=1e-6)
+
+
+def test_scene_contact_table_takes_a_compaction_law():
+    import tomllib
+
+    from fabmd.examples_dir import example_scene
+    from fabmd.model.fabric_model import family_beads
+    from fabmd.scenefile import parse_scene
+
+    data = tomllib.loads(example_scene("plain_weave.toml").read_text())
+    data["contact"] = {"friction": 0.3,
+                       "compaction": {"law": "glass", "reference_pressure_pa": "100 kPa"}}
+    scene = parse_scene(data)
+    fibre = family_beads(scene.fabric, scene.discretisation)["warp"].fibre
+    expected = contact_for_yarn(GLASS_BUNDLE, fibre.area_m2, fibre.diameter_m, 1e5)
+    assert scene.contact.normal_stiffness_pa == pytest.approx(expected["normal_stiffness_pa"])
+    data["contact"]["normal_stiffness_pa"] = 1e9
+    with pytest.raises(InputError, match="not both"):
+        parse_scene(data)
+    data["contact"] = {"compaction": {"law": "custom", "coefficient": 1e-5,
+                                      "modulus_pa": "73 GPa", "vf0": 0.3,
+                                      "reference_pressure_pa": "1 kPa"}}
+    with pytest.raises(InputError, match=r"\[contact.compaction\].*touch at Vf"):
+        parse_scene(data)
