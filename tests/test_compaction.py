@@ -42,6 +42,7 @@ def test_thickness_falls_monotonically_with_pressure(tmp_path):
     s = test.run(cell, tmp_path / "c", engine=Engine(progress=False)).summary
     assert s["pressure_reached"]
     assert s["thickness_monotone"]
+    assert s["quasi_static"]["ok"], s["quasi_static"]["problems"]
     h = s["thickness_at_pressure_m"]
     assert h["1000"] > h["5000"] > h["10000"]
     assert h["100000"] is None  # the platen turned back at 20 kPa

@@ -26,6 +26,7 @@ largest top/bottom pressure mismatch on the loading branch above 1 % of the peak
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
@@ -34,7 +35,7 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError
+from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel, ToolContact
@@ -55,6 +56,9 @@ from .periodic import check_periodic_cell
 
 #: steps over which the pressure that stops the loading is averaged (prime: see the template)
 HALT_WINDOW = 97
+#: above these the loading branch is not quasi-static: kinetic energy over the platen work,
+#: and the two platens' pressures differing (the fabric still accelerating)
+QUASI_STATIC_LIMITS = {"max_kinetic_to_work": 0.1, "max_platen_pressure_mismatch": 0.1}
 #: pressures at which the thickness is always reported [Pa]
 REPORT_PRESSURES_PA = (1e3, 1e4, 1e5)
 
@@ -280,6 +284,13 @@ class Compaction:
                                  "top pressure, on the loading branch above 10 % of the peak",
             **overlap_summary(run_dir, self.contact),
         }
+        problems = [f"{k} = {summary[k]:.2g} > {v:g}" for k, v in QUASI_STATIC_LIMITS.items()
+                    if summary[k] is not None and summary[k] > v]
+        summary["quasi_static"] = {"ok": not problems, "limits": dict(QUASI_STATIC_LIMITS),
+                                   "problems": problems}
+        if problems:
+            warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
+                          f" lower speed_fraction", QuasiStaticWarning, stacklevel=2)
         if not reached:
             summary["pressure_note"] = (
                 f"the top platen travelled {self.max_travel_fraction:g} of the starting gap "
@@ -290,7 +301,8 @@ class Compaction:
                            {"x": p[~loading] / 1e3, "y": h[~loading] * 1e3, "style": "--",
                             "label": "unloading"}],
                 "xlabel": "pressure [kPa]", "ylabel": "thickness [mm]",
-                "title": "Compaction between rigid platens",
+                "title": ("" if not problems else "NOT QUASI-STATIC, do not use: ")
+                + "Compaction between rigid platens",
                 "notes": f"cell {1e3 * summary['cell_m'][0]:.2f} x "
                          f"{1e3 * summary['cell_m'][1]:.2f} mm\n{model.n_beads} beads"}
         return DrivenResult(run_dir, curve, summary, [plot])
