@@ -16,11 +16,13 @@ normal force per unit length of contact per unit overlap of two parallel fibres
 because two parallel bead chains in register touch once per bead: the force per
 unit length is k_n·δ/l0 = k'·δ whatever the spacing (exact while no second
 neighbour touches, δ/d < 1 − sqrt(1 − (s/d)²): 13 % of d at s/d = 0.5, 3.2 % at
-s/d = 0.25; measured in ``tests/test_contact_scaling.py``). A crossing of two
-fibres is a point contact that one bead pair carries at small overlap, so its
-force k'·l0·δ halves when l0 halves: crossings are not converged in s/d (see
-:func:`crossing_force_n`). With k_n ∝ l0 and bead mass ∝ l0 the contact's
-share of the stability bound (ω² ≤ (4k + 6k_n)/m) is the same at every spacing.
+s/d = 0.25; measured in ``tests/test_contact_scaling.py``; past it the finer chain
+is stiffer). A crossing of two fibres is a point contact: in register one bead
+pair carries it and its force k'·l0·δ halves when l0 halves; averaged over bead
+positions the number of pairs in contact grows as 1/l0² and the force doubles
+from s/d 0.5 to 0.25. Crossings are not converged in s/d (:func:`crossing_force_n`).
+With k_n ∝ l0 and bead mass ∝ l0 the contact's share of the stability bound
+(ω² ≤ (4k + 6k_n)/m) is the same at every spacing.
 The default k' = 1e10 Pa is of the order of the line-contact stiffness of solid
 glass rods and of the former default (k_n = 0.1·E·A/l0) on the examples at
 s/d = 0.5 (0.9–3e10 Pa); a yarn of filaments is far softer across: a compaction law
