@@ -64,13 +64,18 @@ def test_default_stiffness_is_per_unit_length_of_fibre():
     assert legacy.normal_stiffness_n_per_m(BEADS) == pytest.approx(0.1 * b.spring_n_per_m)
     assert ToolContact(normal_stiffness_pa=3e9).normal_stiffness_n_per_m(BEADS) == \
         pytest.approx(3e9 * b.bond_length_m)
+    # the default k' = 0.4·E·A/d²: the former 0.1·E·A/l0 per pair at s/d = 0.5, and a
+    # stiffness per unit length that does not change with the spacing
+    assert ContactModel().normal_stiffness_n_per_m(BEADS) == pytest.approx(
+        0.1 * b.spring_n_per_m)
+    assert ContactModel().normal_stiffness_n_per_m(finer) == pytest.approx(
+        0.4 * b.axial_stiffness_n / b.diameter_m**2 * finer[0].bond_length_m)
 
 
 def test_overlap_ratio_of_a_force():
     b = BEADS[0]
-    k_line = ContactModel().normal_stiffness_pa
-    # a force of 5 % of d times one bead spacing of line stiffness overlaps 5 % of d
-    f = 0.05 * b.diameter_m * k_line * b.bond_length_m
+    # a force of 1 % of E·A overlaps δ/d = (F/E·A)·(s/d)/0.1 = 5 % at the default stiffness
+    f = 0.01 * b.axial_stiffness_n
     assert ContactModel().overlap_ratio(f, BEADS) == pytest.approx(0.05)
     hertz = ContactModel(normal="hertz")
     f_ref = hertz.normal_stiffness_n_per_m(BEADS) * hertz.reference_overlap * b.diameter_m

@@ -23,10 +23,13 @@ positions the number of pairs in contact grows as 1/l0² and the force doubles
 from s/d 0.5 to 0.25. Crossings are not converged in s/d (:func:`crossing_force_n`).
 With k_n ∝ l0 and bead mass ∝ l0 the contact's share of the stability bound
 (ω² ≤ (4k + 6k_n)/m) is the same at every spacing.
-The default k' = 1e10 Pa is of the order of the line-contact stiffness of solid
-glass rods and of the former default (k_n = 0.1·E·A/l0) on the examples at
-s/d = 0.5 (0.9–3e10 Pa); a yarn of filaments is far softer across: a compaction law
-(:mod:`fabmd.model.compaction`) gives k' from the yarn's measured behaviour.
+Default k' (``normal_stiffness_pa`` not given): 0.4·E·A/d² of the stiffest virtual
+fibre — a transverse stiffness of the fibre itself (0.1·π·E ≈ 0.31·E for a solid
+fibre, the order of a solid rod's line-contact stiffness), chosen so that at the
+default spacing s/d = 0.5 every bead pair gets exactly the former default
+0.1·E·A/l0; at other spacings k_n = k'·l0 follows the spacing. A yarn of filaments
+is far softer across: a compaction law (:mod:`fabmd.model.compaction`) gives k'
+from the yarn's own behaviour.
 
 Older settings still work and are flagged as discretisation-dependent:
 ``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
@@ -60,11 +63,18 @@ from ..units import quantity
 from .beads import BeadParameters
 
 NORMAL_MODELS = ("hooke", "hertz")
-#: default normal stiffness per unit length of fibre contact k' [Pa] (module docstring)
-DEFAULT_STIFFNESS_PA = 1e10
+#: default k' = DEFAULT_TRANSVERSE_FACTOR · E·A/d² (module docstring): the former default
+#: k_n = 0.1·E·A/l0 at s/d = 0.5, now per unit length
+DEFAULT_TRANSVERSE_FACTOR = 0.4
 
 
-def _normal_stiffness(owner: str, per_length_pa: float, factor: float | None,
+def default_stiffness_pa(beads: list[BeadParameters]) -> float:
+    """Default k' [Pa]: 0.4·E·A/d² of the stiffest virtual fibre (module docstring)."""
+    return DEFAULT_TRANSVERSE_FACTOR * max(b.axial_stiffness_n / b.diameter_m**2
+                                           for b in beads)
+
+
+def _normal_stiffness(owner: str, per_length_pa: float | None, factor: float | None,
                       explicit: float | None, beads: list[BeadParameters]) -> float:
     """k_n per bead pair [N/m]: explicit, else factor·E·A/l0 (legacy), else k'·l0."""
     if explicit is not None:
@@ -73,8 +83,9 @@ def _normal_stiffness(owner: str, per_length_pa: float, factor: float | None,
         raise InputError(f"{owner}: no bead parameters given to derive the contact stiffness")
     if factor is not None:
         return factor * max(b.spring_n_per_m for b in beads)
+    k_line = per_length_pa if per_length_pa is not None else default_stiffness_pa(beads)
     # the widest spacing: the stiffest pair, which sets the time step and the overlaps
-    return per_length_pa * max(b.bond_length_m for b in beads)
+    return k_line * max(b.bond_length_m for b in beads)
 
 
 def crossing_force_n(stiffness_pa: float, spacing_m: float, diameter_m: float,
@@ -111,8 +122,9 @@ class ContactModel:
         normal_stiffness_pa: normal stiffness per unit length of fibre contact k'
             [N/m per m = Pa] (> 0; accepts "10 GPa"): two parallel fibres pressed δ
             together carry k'·δ per metre (Hertz: secant at the reference overlap).
-            Each bead pair gets k_n = k'·l0. Used unless one of the two legacy keys
-            below is given.
+            Each bead pair gets k_n = k'·l0. None (default): 0.4·E·A/d² of the stiffest
+            fibre (the former default at s/d = 0.5). Used unless one of the two legacy
+            keys below is given.
         stiffness_factor: legacy: k_n over the axial bond spring E·A/l0 of the
             stiffest fibre (> 0). Depends on the bead spacing (transverse stiffness
             per length ∝ 1/l0²); prefer ``normal_stiffness_pa``.
@@ -132,7 +144,7 @@ class ContactModel:
 
     friction: float = 0.3
     normal: str = "hooke"
-    normal_stiffness_pa: float = DEFAULT_STIFFNESS_PA
+    normal_stiffness_pa: float | None = None
     stiffness_factor: float | None = None
     stiffness_n_per_m: float | None = None
     tangential_ratio: float = 2.0 / 7.0
@@ -144,9 +156,10 @@ class ContactModel:
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
         inputs.one_of("contact.normal", self.normal, NORMAL_MODELS)
-        object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
-            "contact.normal_stiffness_pa",
-            quantity(self.normal_stiffness_pa, "pressure", "contact.normal_stiffness_pa")))
+        if self.normal_stiffness_pa is not None:
+            object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
+                "contact.normal_stiffness_pa",
+                quantity(self.normal_stiffness_pa, "pressure", "contact.normal_stiffness_pa")))
         if self.stiffness_factor is not None:
             inputs.positive("contact.stiffness_factor", self.stiffness_factor)
         if self.stiffness_n_per_m is not None:
@@ -237,7 +250,7 @@ class ToolContact:
         friction: Coulomb coefficient μ between tool and fibres (>= 0).
         normal_stiffness_pa: normal stiffness per unit length of fibre on the tool k'
             [Pa] (> 0): a fibre lying on a flat tool carries k'·δ per metre; each bead
-            gets k_n = k'·l0 (see :class:`ContactModel`).
+            gets k_n = k'·l0 (see :class:`ContactModel`). None (default): 0.4·E·A/d².
         stiffness_factor: legacy: k_n over E·A/l0 of the stiffest fibre (> 0);
             spacing-dependent.
         stiffness_n_per_m: legacy: explicit normal stiffness k_n [N/m] (> 0).
@@ -247,7 +260,7 @@ class ToolContact:
     """
 
     friction: float = 0.2
-    normal_stiffness_pa: float = DEFAULT_STIFFNESS_PA
+    normal_stiffness_pa: float | None = None
     stiffness_factor: float | None = None
     stiffness_n_per_m: float | None = None
     tangential_ratio: float = 2.0 / 7.0
@@ -255,9 +268,11 @@ class ToolContact:
 
     def __post_init__(self):
         inputs.non_negative("tool_contact.friction", self.friction)
-        object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
-            "tool_contact.normal_stiffness_pa",
-            quantity(self.normal_stiffness_pa, "pressure", "tool_contact.normal_stiffness_pa")))
+        if self.normal_stiffness_pa is not None:
+            object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
+                "tool_contact.normal_stiffness_pa",
+                quantity(self.normal_stiffness_pa, "pressure",
+                         "tool_contact.normal_stiffness_pa")))
         if self.stiffness_factor is not None:
             inputs.positive("tool_contact.stiffness_factor", self.stiffness_factor)
         if self.stiffness_n_per_m is not None:
