@@ -66,7 +66,7 @@ REPORT_PRESSURES_PA = (1e3, 1e4, 1e5)
 def thickness_at(pressure_pa: np.ndarray, thickness_m: np.ndarray,
                  targets: tuple[float, ...]) -> dict[str, float | None]:
     """Thickness [m] where the loading branch first reaches each target pressure
-    (linear interpolation; None when the curve never gets there)."""
+    (linear interpolation; None when the curve never gets there or starts above it)."""
     out = {}
     for p in targets:
         above = np.nonzero(pressure_pa >= p)[0]
@@ -74,8 +74,8 @@ def thickness_at(pressure_pa: np.ndarray, thickness_m: np.ndarray,
             out[f"{p:g}"] = None
             continue
         i = int(above[0])
-        if i == 0:
-            out[f"{p:g}"] = float(thickness_m[0])
+        if i == 0:  # below the start of the curve: not measured
+            out[f"{p:g}"] = float(thickness_m[0]) if pressure_pa[0] == p else None
             continue
         p0, p1 = pressure_pa[i - 1], pressure_pa[i]
         w = (p - p0) / (p1 - p0) if p1 != p0 else 1.0
@@ -244,10 +244,13 @@ class Compaction:
                                                 * -np.diff(h))])
         pl, hl = p[loading], h[loading]
         peak = float(pl.max()) if pl.size else 0.0
-        # the compaction curve: the loading branch after the last interval with no load
-        # (a fabric that rattles between the platens first is not yet compacted)
-        idle = np.nonzero(pl <= 0.0)[0]
-        first = int(idle[-1]) + 1 if idle.size else 0
+        # the compaction curve: the loading branch from where the load goes through the
+        # fabric for good (both platens carry it, within a factor 2), so that a loose fabric
+        # rattling between the platens first is left out
+        pbl = pb[loading]
+        through = (pl > 0.0) & (pbl > 0.5 * pl) & (pbl < 2.0 * pl)
+        broken = np.nonzero(~through)[0]
+        first = int(broken[-1]) + 1 if broken.size else 0
         pc, hc = pl[first:], hl[first:]
         order = np.argsort(pc, kind="stable")
         rises = np.diff(hc[order])
@@ -271,13 +274,15 @@ class Compaction:
             "max_pressure_reached_pa": peak,
             "pressure_reached": bool(reached),
             "contact_thickness_m": float(hc[0]) if hc.size else None,
+            "contact_pressure_pa": float(pc[0]) if pc.size else None,
             "min_thickness_m": float(h.min()),
             "thickness_at_pressure_m": thickness_at(pc, hc, targets),
             "datasheet_pressure_pa": self.datasheet_pressure_pa,
             "final_thickness_m": float(h[-1]),
             "thickness_monotone": bool(rises.size == 0 or rises.max() <= 1e-9 * hi),
-            "monotone_note": "loading branch after its last unloaded interval: sorted by "
-                             "pressure, the thickness never rises",
+            "monotone_note": "loading branch from where both platens carry the load (within "
+                             "a factor 2) to the turn: sorted by pressure, the thickness "
+                             "never rises",
             "max_kinetic_to_work": float(ke_ratio.max()) if ke_ratio.size else None,
             "max_platen_pressure_mismatch": float(mismatch.max()) if mismatch.size else None,
             "quasi_static_note": "kinetic energy over the platen work, and |bottom − top| / "
