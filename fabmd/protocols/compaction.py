@@ -106,7 +106,7 @@ class Compaction:
 
     max_pressure_pa: float = 2e5
     datasheet_pressure_pa: float | None = None
-    speed_fraction: float = 5e-5
+    speed_fraction: float = 5e-6
     max_travel_fraction: float = 0.8
     local_damping: float = 0.7
     settle_fraction: float = 0.02
