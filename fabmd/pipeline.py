@@ -68,6 +68,8 @@ TESTS: dict[str, TestKind] = {
                       {"length_m": 0.200, "width_m": 0.200, "relax": None}),
     "periodic-tension": TestKind("fabmd.protocols.periodic", "PeriodicTension", None),
     "periodic-shear": TestKind("fabmd.protocols.periodic", "PeriodicShear", None),
+    # the as-woven periodic cell between two rigid platens
+    "compaction": TestKind("fabmd.protocols.compaction", "Compaction", None),
 }
 
 

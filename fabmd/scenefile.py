@@ -10,7 +10,7 @@ Sections fabmd owns (unknown keys in them are refused, naming the key)::
     [yarns.binder]   (3D architectures only)
     [materials.NAME] FibreMaterial fields: modulus_pa, density_kg_m3
     [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor
-    [contact]        ContactModel fields: friction, normal, stiffness_factor, ...
+    [contact]        ContactModel fields: friction, normal, normal_stiffness_pa, ...
 
 Every other top-level table (``[crimp]``, ``[tension]``, ``[picture_frame]``,
 ``[drape]``, ...) is kept as a raw dict in :attr:`Scene.protocols` for the
@@ -220,6 +220,54 @@ def _fields(cls) -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(cls))
 
 
+#: keys of ``[contact] compaction = {...}``
+COMPACTION_KEYS = ("law", "coefficient", "modulus_pa", "vf0", "exponent",
+                   "reference_pressure_pa", "family")
+
+
+def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
+                        contact_table: dict) -> float:
+    """k' [Pa] of ``[contact] compaction = {law = "glass" | "carbon" | "custom", ...}``: the
+    line-contact stiffness with which a hexagonal bundle of the family's virtual fibres
+    reaches the law's fibre volume fraction at ``reference_pressure_pa`` (default 100 kPa;
+    :func:`fabmd.model.compaction.contact_for_yarn`)."""
+    from .model.compaction import CARBON_BUNDLE, GLASS_BUNDLE, CompactionLaw, contact_for_yarn
+    from .model.fabric_model import family_beads
+
+    section = "contact.compaction"
+    if not isinstance(table, dict):
+        raise InputError(f"{where}: [{section}] must be a table, got {table!r}")
+    _check_keys(table, COMPACTION_KEYS, where, section)
+    if "normal_stiffness_pa" in contact_table:
+        raise InputError(f"{where}: [contact] give normal_stiffness_pa or compaction, not "
+                         f"both (the law sets the stiffness)")
+    kwargs = dict(table)
+    law_name = kwargs.pop("law", "custom")
+    family = kwargs.pop("family", "warp")
+    p_ref = kwargs.pop("reference_pressure_pa", 1e5)
+    laws = {"glass": GLASS_BUNDLE, "carbon": CARBON_BUNDLE}
+    if law_name in laws:
+        if kwargs:
+            raise InputError(f"{where}: [{section}] law = {law_name!r} takes no "
+                             f"{', '.join(kwargs)} (use law = \"custom\")")
+        law = laws[law_name]
+    elif law_name == "custom":
+        law = _build(where, section, CompactionLaw, **kwargs)
+    else:
+        raise InputError(f"{where}: [{section}] law must be one of glass, carbon, custom, "
+                         f"got {law_name!r}")
+    fams = family_beads(fabric, disc)
+    if family not in fams:
+        raise InputError(f"{where}: [{section}] family must be one of {', '.join(fams)}, "
+                         f"got {family!r}")
+    fibre = fams[family].fibre
+    try:
+        return contact_for_yarn(law, fibre.area_m2, fibre.diameter_m,
+                                p_ref)["normal_stiffness_pa"]
+    except InputError as exc:
+        raise InputError(f"{where}: [{section}] {exc}") from None
+
+
 def parse_scene(data: dict, source: str = "scene") -> Scene:
     """Validate a scene given as a dict (e.g. parsed TOML); see the module docstring."""
     where = source
@@ -307,8 +355,12 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     disc_table = _section(data, "discretisation", where)
     _check_keys(disc_table, _fields(Discretisation), where, "discretisation")
     disc = _build(where, "discretisation", Discretisation, **disc_table)
-    contact_table = _section(data, "contact", where)
+    contact_table = dict(_section(data, "contact", where))
+    law_table = contact_table.pop("compaction", None)
     _check_keys(contact_table, _fields(ContactModel), where, "contact")
+    if law_table is not None:
+        contact_table["normal_stiffness_pa"] = _stiffness_from_law(
+            where, law_table, fabric, disc, contact_table)
     contact = _build(where, "contact", ContactModel, **contact_table)
     title = data.get("title", "")
     if not isinstance(title, str):

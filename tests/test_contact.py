@@ -6,7 +6,7 @@ import pytest
 
 from fabmd.engine.script import logical_lines
 from fabmd.errors import InputError
-from fabmd.model.beads import bead_parameters
+from fabmd.model.beads import Discretisation, bead_parameters
 from fabmd.model.contact import ContactModel, ToolContact
 from fabmd.model.material import GLASS, VirtualFibre
 from fabmd.protocols.capstan import Capstan
@@ -48,18 +48,33 @@ def test_pair_style_is_the_cheapest_that_carries_the_physics():
     assert ContactModel(friction=0.0, normal="hertz").pair_style() == "gran/hertz/history"
 
 
-def test_default_stiffness_follows_the_fibre():
+def test_default_stiffness_is_per_unit_length_of_fibre():
     b = BEADS[0]
-    assert ContactModel().normal_stiffness_n_per_m(BEADS) == pytest.approx(0.1 * b.spring_n_per_m)
+    c = ContactModel(normal_stiffness_pa="2 GPa")
+    assert c.per_length and c.normal_stiffness_pa == 2e9
+    # k_n = k'·l0: a bead pair carries the force of one bead spacing of line contact
+    assert c.normal_stiffness_n_per_m(BEADS) == pytest.approx(2e9 * b.bond_length_m)
+    finer = [bead_parameters(VirtualFibre.solid(GLASS, 0.1e-3), Discretisation(0.25))]
+    assert c.normal_stiffness_n_per_m(finer) == pytest.approx(
+        0.5 * c.normal_stiffness_n_per_m(BEADS))
+    # legacy keys keep their meaning (and are not per unit length)
     assert ContactModel(stiffness_n_per_m=7.0).normal_stiffness_n_per_m(BEADS) == 7.0
-    # the overlap a contact force causes: delta/d = (F/EA)(s/d)/factor
-    f = 0.01 * b.axial_stiffness_n
-    delta = f / ContactModel().normal_stiffness_n_per_m(BEADS)
-    assert delta / b.diameter_m == pytest.approx(0.01 * 0.5 / 0.1)
+    legacy = ContactModel(stiffness_factor=0.1)
+    assert not legacy.per_length
+    assert legacy.normal_stiffness_n_per_m(BEADS) == pytest.approx(0.1 * b.spring_n_per_m)
+    assert ToolContact(normal_stiffness_pa=3e9).normal_stiffness_n_per_m(BEADS) == \
+        pytest.approx(3e9 * b.bond_length_m)
+    # the default k' = 0.4·E·A/d²: the former 0.1·E·A/l0 per pair at s/d = 0.5, and a
+    # stiffness per unit length that does not change with the spacing
+    assert ContactModel().normal_stiffness_n_per_m(BEADS) == pytest.approx(
+        0.1 * b.spring_n_per_m)
+    assert ContactModel().normal_stiffness_n_per_m(finer) == pytest.approx(
+        0.4 * b.axial_stiffness_n / b.diameter_m**2 * finer[0].bond_length_m)
 
 
 def test_overlap_ratio_of_a_force():
     b = BEADS[0]
+    # a force of 1 % of E·A overlaps δ/d = (F/E·A)·(s/d)/0.1 = 5 % at the default stiffness
     f = 0.01 * b.axial_stiffness_n
     assert ContactModel().overlap_ratio(f, BEADS) == pytest.approx(0.05)
     hertz = ContactModel(normal="hertz")

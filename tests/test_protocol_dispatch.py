@@ -7,6 +7,7 @@ from fabmd.errors import InputError
 from fabmd.model.contact import ContactModel
 from fabmd.pipeline import TESTS, build_protocol
 from fabmd.protocols.bias_extension import BiasExtension
+from fabmd.protocols.compaction import Compaction
 from fabmd.protocols.periodic import PeriodicShear, PeriodicTension
 from fabmd.protocols.picture_frame import PictureFrame
 from fabmd.protocols.tension import Tension
@@ -20,8 +21,9 @@ def test_names_map_to_the_protocols():
     assert isinstance(build_protocol("bias-extension"), BiasExtension)
     assert isinstance(build_protocol("periodic-tension"), PeriodicTension)
     assert isinstance(build_protocol("periodic-shear"), PeriodicShear)
+    assert isinstance(build_protocol("compaction"), Compaction)
     assert set(TESTS) == {"tension", "picture-frame", "bias-extension", "periodic-tension",
-                          "periodic-shear", "drape"}
+                          "periodic-shear", "drape", "compaction"}
 
 
 def test_settings_tables_become_objects():

@@ -26,7 +26,7 @@ CAUSES: dict[str, tuple[str, str]] = {
                      "lower the loading speed or time_step.factor"),
     "overlap": ("two beads of different fibres overlap beyond the limit",
                 "the contact stiffness is too low for the loads (raise "
-                "contact.stiffness_factor) or fibres are pushed through each other too fast"),
+                "contact.normal_stiffness_pa) or fibres are pushed through each other too fast"),
     "lost_atoms": ("atoms were lost (left the box or a bond partner went missing)",
                    "the run went unstable; lower time_step.factor or the loading speed"),
     "runaway_atom": ("a bead flew far away (the box or the neighbour lists blew up)",

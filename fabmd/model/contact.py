@@ -6,18 +6,38 @@ fibres (``neigh_modify exclude molecule/intra all``), with a normal spring
 fraction of critical, and a history-dependent tangential spring capped by
 Coulomb friction μ·F_n. Tools (walls, punch, die, clamps) have their own μ.
 
-Default normal stiffness: k_n = stiffness_factor × E·A/l0 of the stiffest
-virtual fibre. A contact force F then overlaps the beads by
+Normal stiffness per unit length of fibre (default). The contact is a property
+of the fibre, stated in physical units: ``normal_stiffness_pa`` = k' is the
+normal force per unit length of contact per unit overlap of two parallel fibres
+[N/m per m = Pa]. Each bead pair gets
 
-    δ/d = (F / E·A) · (s/d) / stiffness_factor,
+    k_n = k' · l0        (l0 = bead spacing),
 
-so overlaps scale with the fibre strain the same force would cause; with the
-defaults (0.1, s/d = 0.5) a bead contact carrying 1 % of E·A overlaps 5 % of d.
-The stiffer the contact, the smaller the time step: the bound in
-:mod:`fabmd.model.beads` adds 6·k_n to the 4·k of the bonds, so factor 0.1 costs
-7 % of the time step, factor 1 costs 37 %. Every run with contact reports the
-largest overlap it saw (:func:`fabmd.scene.blocks.overlap_monitor`), warns past
-``overlap_warning`` and stops past ``overlap_limit``.
+because two parallel bead chains in register touch once per bead: the force per
+unit length is k_n·δ/l0 = k'·δ whatever the spacing (exact while no second
+neighbour touches, δ/d < 1 − sqrt(1 − (s/d)²): 13 % of d at s/d = 0.5, 3.2 % at
+s/d = 0.25; measured in ``tests/test_contact_scaling.py``; past it the finer chain
+is stiffer). A crossing of two fibres is a point contact: in register one bead
+pair carries it and its force k'·l0·δ halves when l0 halves; averaged over bead
+positions the number of pairs in contact grows as 1/l0² and the force doubles
+from s/d 0.5 to 0.25. Crossings are not converged in s/d (:func:`crossing_force_n`).
+With k_n ∝ l0 and bead mass ∝ l0 the contact's share of the stability bound
+(ω² ≤ (4k + 6k_n)/m) is the same at every spacing.
+Default k' (``normal_stiffness_pa`` not given): 0.4·E·A/d² of the stiffest virtual
+fibre — a transverse stiffness of the fibre itself (0.1·π·E ≈ 0.31·E for a solid
+fibre, the order of a solid rod's line-contact stiffness), chosen so that at the
+default spacing s/d = 0.5 every bead pair gets exactly the former default
+0.1·E·A/l0; at other spacings k_n = k'·l0 follows the spacing. A yarn of filaments
+is far softer across: a compaction law (:mod:`fabmd.model.compaction`) gives k'
+from the yarn's own behaviour.
+
+Older settings still work and are flagged as discretisation-dependent:
+``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
+and ``stiffness_n_per_m`` (a fixed k_n per bead pair, ∝ 1/l0 per length).
+
+Every run with contact reports the largest overlap it saw
+(:func:`fabmd.scene.blocks.overlap_monitor`), warns past ``overlap_warning`` and
+stops past ``overlap_limit``.
 
 Pair style (measured, ``benchmarks/RESULTS.md``, section "Pair styles"): on the
 same 12,200 beads ``gran/hooke/history`` computes the same forces as ``pair_style
@@ -39,18 +59,57 @@ from dataclasses import dataclass
 
 from .. import inputs
 from ..errors import InputError
+from ..units import quantity
 from .beads import BeadParameters
 
 NORMAL_MODELS = ("hooke", "hertz")
+#: default k' = DEFAULT_TRANSVERSE_FACTOR · E·A/d² (module docstring): the former default
+#: k_n = 0.1·E·A/l0 at s/d = 0.5, now per unit length
+DEFAULT_TRANSVERSE_FACTOR = 0.4
 
 
-def _normal_stiffness(owner: str, factor: float, explicit: float | None,
-                      beads: list[BeadParameters]) -> float:
+def default_stiffness_pa(beads: list[BeadParameters]) -> float:
+    """Default k' [Pa]: 0.4·E·A/d² of the stiffest virtual fibre (module docstring)."""
+    return DEFAULT_TRANSVERSE_FACTOR * max(b.axial_stiffness_n / b.diameter_m**2
+                                           for b in beads)
+
+
+def _normal_stiffness(owner: str, per_length_pa: float | None, factor: float | None,
+                      explicit: float | None, beads: list[BeadParameters]) -> float:
+    """k_n per bead pair [N/m]: explicit, else factor·E·A/l0 (legacy), else k'·l0."""
     if explicit is not None:
         return explicit
     if not beads:
         raise InputError(f"{owner}: no bead parameters given to derive the contact stiffness")
-    return factor * max(b.spring_n_per_m for b in beads)
+    if factor is not None:
+        return factor * max(b.spring_n_per_m for b in beads)
+    k_line = per_length_pa if per_length_pa is not None else default_stiffness_pa(beads)
+    # the widest spacing: the stiffest pair, which sets the time step and the overlaps
+    return k_line * max(b.bond_length_m for b in beads)
+
+
+def crossing_force_n(stiffness_pa: float, spacing_m: float, diameter_m: float,
+                     overlap_m: float, angle_deg: float = 90.0, shift_m: float = 0.0,
+                     shift_b_m: float = 0.0) -> float:
+    """Normal force [N] between two straight bead chains crossing at ``angle_deg`` with
+    Hooke bead pairs k_n = k'·l0, pressed until their axes are d − ``overlap_m`` apart.
+
+    Sums k_n·(d − r) over bead pairs in contact (force along the axis-to-axis
+    normal, r = pair distance). ``shift_m``/``shift_b_m``: offsets of the bead
+    lattices from the crossing point along each chain. Used to show how a crossing
+    scales with the spacing (a point contact: ∝ l0 at small overlap).
+    """
+    import numpy as np
+
+    gap = diameter_m - overlap_m
+    n = int(np.ceil(2 * diameter_m / spacing_m)) + 2
+    s = spacing_m * np.arange(-n, n + 1)
+    a = (s + shift_m)[:, None]
+    b = (s + shift_b_m)[None, :]
+    c = math.cos(math.radians(angle_deg))
+    r = np.sqrt(gap * gap + a * a + b * b - 2 * a * b * c)
+    pen = np.clip(diameter_m - r, 0.0, None)
+    return float(stiffness_pa * spacing_m * np.sum(pen * gap / r))
 
 
 @dataclass(frozen=True)
@@ -60,10 +119,19 @@ class ContactModel:
     Args:
         friction: Coulomb coefficient μ (>= 0).
         normal: ``"hooke"`` (linear, default) or ``"hertz"``.
-        stiffness_factor: k_n over the axial bond spring E·A/l0 of the stiffest
-            fibre (> 0), used when ``stiffness_n_per_m`` is not given.
-        stiffness_n_per_m: explicit linear normal stiffness k_n [N/m] (> 0).
-        tangential_ratio: k_t/k_n (> 0; 2/7 is LAMMPS's usual choice).
+        normal_stiffness_pa: normal stiffness per unit length of fibre contact k'
+            [N/m per m = Pa] (> 0; accepts "10 GPa"): two parallel fibres pressed δ
+            together carry k'·δ per metre (Hertz: secant at the reference overlap).
+            Each bead pair gets k_n = k'·l0. None (default): 0.4·E·A/d² of the stiffest
+            fibre (the former default at s/d = 0.5). Used unless one of the two legacy
+            keys below is given.
+        stiffness_factor: legacy: k_n over the axial bond spring E·A/l0 of the
+            stiffest fibre (> 0). Depends on the bead spacing (transverse stiffness
+            per length ∝ 1/l0²); prefer ``normal_stiffness_pa``.
+        stiffness_n_per_m: legacy: explicit k_n per bead pair [N/m] (> 0); also
+            spacing-dependent.
+        tangential_ratio: k_t/k_n (> 0; 2/7 is LAMMPS's usual choice); k_t scales
+            with l0 like k_n, so it too is a stiffness per unit length.
         damping_ratio: normal damping as a fraction of critical, in (0, 1]. Undamped
             contacts chatter and lose their tangential history at each bounce, which
             lowers friction (capstan on an undamped wall: −11 %; 0.03 is enough).
@@ -76,7 +144,8 @@ class ContactModel:
 
     friction: float = 0.3
     normal: str = "hooke"
-    stiffness_factor: float = 0.1
+    normal_stiffness_pa: float | None = None
+    stiffness_factor: float | None = None
     stiffness_n_per_m: float | None = None
     tangential_ratio: float = 2.0 / 7.0
     damping_ratio: float = 0.3
@@ -87,7 +156,12 @@ class ContactModel:
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
         inputs.one_of("contact.normal", self.normal, NORMAL_MODELS)
-        inputs.positive("contact.stiffness_factor", self.stiffness_factor)
+        if self.normal_stiffness_pa is not None:
+            object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
+                "contact.normal_stiffness_pa",
+                quantity(self.normal_stiffness_pa, "pressure", "contact.normal_stiffness_pa")))
+        if self.stiffness_factor is not None:
+            inputs.positive("contact.stiffness_factor", self.stiffness_factor)
         if self.stiffness_n_per_m is not None:
             inputs.positive("contact.stiffness_n_per_m", self.stiffness_n_per_m)
         inputs.positive("contact.tangential_ratio", self.tangential_ratio)
@@ -101,8 +175,13 @@ class ContactModel:
 
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """Linear(ised) normal stiffness k_n [N/m] (Hertz: secant at the reference overlap)."""
-        return _normal_stiffness("contact", self.stiffness_factor, self.stiffness_n_per_m,
-                                 beads)
+        return _normal_stiffness("contact", self.normal_stiffness_pa, self.stiffness_factor,
+                                 self.stiffness_n_per_m, beads)
+
+    @property
+    def per_length(self) -> bool:
+        """True when k_n follows the bead spacing (k' given per unit length)."""
+        return self.stiffness_factor is None and self.stiffness_n_per_m is None
 
     def stability_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """Highest tangent normal stiffness expected [N/m], for the stable time step.
@@ -169,23 +248,33 @@ class ToolContact:
 
     Args:
         friction: Coulomb coefficient μ between tool and fibres (>= 0).
-        stiffness_factor: k_n over E·A/l0 of the stiffest fibre (> 0), used
-            when ``stiffness_n_per_m`` is not given.
-        stiffness_n_per_m: explicit normal stiffness k_n [N/m] (> 0).
+        normal_stiffness_pa: normal stiffness per unit length of fibre on the tool k'
+            [Pa] (> 0): a fibre lying on a flat tool carries k'·δ per metre; each bead
+            gets k_n = k'·l0 (see :class:`ContactModel`). None (default): 0.4·E·A/d².
+        stiffness_factor: legacy: k_n over E·A/l0 of the stiffest fibre (> 0);
+            spacing-dependent.
+        stiffness_n_per_m: legacy: explicit normal stiffness k_n [N/m] (> 0).
         tangential_ratio: k_t/k_n (> 0).
         damping_ratio: normal damping as a fraction of critical, in (0, 1] (see
             :class:`ContactModel`: undamped contacts chatter and lose friction).
     """
 
     friction: float = 0.2
-    stiffness_factor: float = 0.1
+    normal_stiffness_pa: float | None = None
+    stiffness_factor: float | None = None
     stiffness_n_per_m: float | None = None
     tangential_ratio: float = 2.0 / 7.0
     damping_ratio: float = 0.3
 
     def __post_init__(self):
         inputs.non_negative("tool_contact.friction", self.friction)
-        inputs.positive("tool_contact.stiffness_factor", self.stiffness_factor)
+        if self.normal_stiffness_pa is not None:
+            object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
+                "tool_contact.normal_stiffness_pa",
+                quantity(self.normal_stiffness_pa, "pressure",
+                         "tool_contact.normal_stiffness_pa")))
+        if self.stiffness_factor is not None:
+            inputs.positive("tool_contact.stiffness_factor", self.stiffness_factor)
         if self.stiffness_n_per_m is not None:
             inputs.positive("tool_contact.stiffness_n_per_m", self.stiffness_n_per_m)
         inputs.positive("tool_contact.tangential_ratio", self.tangential_ratio)
@@ -194,8 +283,8 @@ class ToolContact:
 
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """Normal stiffness k_n [N/m]."""
-        return _normal_stiffness("tool_contact", self.stiffness_factor,
-                                 self.stiffness_n_per_m, beads)
+        return _normal_stiffness("tool_contact", self.normal_stiffness_pa,
+                                 self.stiffness_factor, self.stiffness_n_per_m, beads)
 
     def wall_coefficients(self, beads: list[BeadParameters]) -> dict[str, float]:
         """k_n [N/m], k_t [N/m], damping rates γ_n, γ_t [1/s] (force = m·γ·v) and μ.

@@ -170,7 +170,7 @@ def overlap_summary(run_dir: Path, contact_model: ContactModel | None = None,
         step = int(raw["step"][np.argmax(np.maximum(pair, tool))])
         messages.append(f"largest overlap {worst:.3g} d (step {step}) is above the warning "
                         f"limit {threshold:g} d: contact too soft for these loads; raise the "
-                        f"contact stiffness_factor or load less")
+                        f"contact normal_stiffness_pa or load less")
         if warn and mpi.is_root():
             warnings.warn(messages[-1], OverlapWarning, stacklevel=2)
     return {"max_overlap_ratio": worst, "max_pair_overlap_ratio": worst_pair,

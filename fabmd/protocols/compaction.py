@@ -1,0 +1,313 @@
+"""Fabric compaction between two rigid platens: thickness against pressure.
+
+The standard characterisation of a dry reinforcement (and the source for
+calibrating its transverse behaviour): the as-woven fabric — a cell periodic in x
+and y, so no edges — lies on a fixed bottom platen; the top platen comes down at
+a constant speed until the mean pressure over an output interval reaches
+``max_pressure_pa``, then goes back up as far as it came. Both platens are
+``fix wall/gran/region`` planes (``granular hooke ... linear_history``, see
+:class:`~fabmd.model.contact.ToolContact`).
+
+* pressure p = (force on the top platen) / (lx·ly) [Pa], interval mean;
+* thickness h = distance between the platens [m] (a bead touches a platen at its
+  surface, so h is the fabric's thickness including the bead radii), interval mean;
+* ``curve.csv``: ``pressure_pa``, ``thickness_m``, ``phase`` (1 loading, −1 unloading),
+  the bottom platen's pressure (equal to the top's when quasi-static), kinetic energy;
+* ``summary.json``: thickness at 1, 10 and 100 kPa (loading branch, first
+  crossing) and at ``datasheet_pressure_pa`` when given, and whether the loading
+  thickness fell monotonically with pressure.
+
+Quasi-static: local (Cundall) damping, which opposes each bead's unbalanced force
+rather than its velocity, so the slow following motion carries no drag into the
+pressure; the summary reports the largest kinetic energy over the work done and the
+largest top/bottom pressure mismatch on the loading branch above 1 % of the peak.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from .. import inputs
+from ..engine import Engine, mpi
+from ..errors import InputError, QuasiStaticWarning
+from ..model.bead_model import BeadModel
+from ..model.beads import TimeStep, model_bead_parameters
+from ..model.contact import ContactModel, ToolContact
+from ..results.folder import read_ave_time
+from ..scene import blocks
+from ..scene.templates import render
+from ..units import quantity
+from .common import (
+    DATA_FILE,
+    input_name,
+    overlap_summary,
+    resume_folder,
+    scene_dict,
+    write_run_folder,
+)
+from .driven import DrivenResult
+from .periodic import check_periodic_cell
+
+#: steps over which the pressure that stops the loading is averaged (prime: see the template)
+HALT_WINDOW = 97
+#: above these the loading branch is not quasi-static: kinetic energy over the platen work,
+#: and the two platens' pressures differing (the fabric still accelerating)
+QUASI_STATIC_LIMITS = {"max_kinetic_to_work": 0.1, "max_platen_pressure_mismatch": 0.1}
+#: pressures at which the thickness is always reported [Pa]
+REPORT_PRESSURES_PA = (1e3, 1e4, 1e5)
+
+
+def thickness_at(pressure_pa: np.ndarray, thickness_m: np.ndarray,
+                 targets: tuple[float, ...]) -> dict[str, float | None]:
+    """Thickness [m] where the loading branch first reaches each target pressure
+    (linear interpolation; None when the curve never gets there or starts above it)."""
+    out = {}
+    for p in targets:
+        above = np.nonzero(pressure_pa >= p)[0]
+        if not above.size:
+            out[f"{p:g}"] = None
+            continue
+        i = int(above[0])
+        if i == 0:  # below the start of the curve: not measured
+            out[f"{p:g}"] = float(thickness_m[0]) if pressure_pa[0] == p else None
+            continue
+        p0, p1 = pressure_pa[i - 1], pressure_pa[i]
+        w = (p - p0) / (p1 - p0) if p1 != p0 else 1.0
+        out[f"{p:g}"] = float(thickness_m[i - 1] + w * (thickness_m[i] - thickness_m[i - 1]))
+    return out
+
+
+@dataclass(frozen=True)
+class Compaction:
+    """Compaction of a periodic cell between two rigid platens (module docstring).
+
+    Args:
+        max_pressure_pa: pressure at which the platen turns back [Pa] (> 0; "200 kPa").
+        datasheet_pressure_pa: a pressure at which the datasheet states the thickness
+            [Pa]; reported too (None: none).
+        speed_fraction: platen speed over the fibres' axial wave speed, (0, 0.01].
+        max_travel_fraction: the furthest the top platen may go down, as a fraction
+            of the starting gap, (0, 0.95]; the loading stops there if the pressure
+            is not reached (the summary says so).
+        local_damping: Cundall local damping coefficient, [0, 1).
+        settle_fraction: the fabric first settles between the platens at rest for this
+            fraction of the longest loading time, [0, 1] (a whole number of intervals).
+        contact: fibre–fibre contact.
+        tool: platen contact (per unit length of fibre on the platen).
+        time_step: time-step policy.
+        samples: output intervals over the full loading travel (>= 10).
+    """
+
+    max_pressure_pa: float = 2e5
+    datasheet_pressure_pa: float | None = None
+    speed_fraction: float = 5e-6
+    max_travel_fraction: float = 0.8
+    local_damping: float = 0.7
+    settle_fraction: float = 0.02
+    contact: ContactModel = field(default_factory=ContactModel)
+    tool: ToolContact = field(default_factory=lambda: ToolContact(friction=0.2))
+    time_step: TimeStep = field(default_factory=TimeStep)
+    samples: int = 2000
+
+    protocol: ClassVar[str] = "compaction"
+
+    def __post_init__(self):
+        object.__setattr__(self, "max_pressure_pa", inputs.positive(
+            "compaction.max_pressure_pa",
+            quantity(self.max_pressure_pa, "pressure", "compaction.max_pressure_pa")))
+        if self.datasheet_pressure_pa is not None:
+            object.__setattr__(self, "datasheet_pressure_pa", inputs.positive(
+                "compaction.datasheet_pressure_pa",
+                quantity(self.datasheet_pressure_pa, "pressure",
+                         "compaction.datasheet_pressure_pa")))
+        inputs.in_range("compaction.speed_fraction", self.speed_fraction, 0, 0.01,
+                        low_open=True)
+        inputs.in_range("compaction.max_travel_fraction", self.max_travel_fraction, 0, 0.95,
+                        low_open=True)
+        inputs.in_range("compaction.local_damping", self.local_damping, 0, 1, high_open=True)
+        inputs.in_range("compaction.settle_fraction", self.settle_fraction, 0, 1)
+        inputs.positive_int("compaction.samples", self.samples, minimum=10)
+
+    # -- geometry and time ---------------------------------------------------------------
+    def platens(self, model: BeadModel) -> tuple[float, float]:
+        """(z of the bottom platen, z of the top platen at the start) [m]: each touches
+        the outermost bead surface."""
+        r = 0.5 * model.diameters
+        z = model.positions[:, 2]
+        return float((z - r).min()), float((z + r).max())
+
+    def area_m2(self, model: BeadModel) -> float:
+        size = model.box_hi - model.box_lo
+        return float(size[0] * size[1])
+
+    def speed_m_s(self, model: BeadModel) -> float:
+        c = min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
+                for b in model_bead_parameters(model))
+        return self.speed_fraction * c
+
+    def time_step_s(self, model: BeadModel) -> float:
+        beads = model_bead_parameters(model)
+        kn = max(self.contact.stability_stiffness_n_per_m(beads),
+                 self.tool.normal_stiffness_n_per_m(beads))
+        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+
+    def max_steps(self, model: BeadModel) -> int:
+        lo, hi = self.platens(model)
+        travel = self.max_travel_fraction * (hi - lo)
+        return math.ceil(travel / self.speed_m_s(model) / self.time_step_s(model))
+
+    def settle_steps(self, model: BeadModel) -> int:
+        """Steps the fabric settles between the platens at rest before the loading."""
+        return self.every(model) * max(1, round(self.settle_fraction * self.samples))
+
+    def every(self, model: BeadModel) -> int:
+        return max(1, self.max_steps(model) // self.samples)
+
+    def input_text(self, model: BeadModel) -> str:
+        check_periodic_cell(model, self.protocol)
+        if model.periodic[2]:
+            raise InputError("compaction needs a cell that is not periodic in z (the "
+                             "platens close on it), got periodic = "
+                             f"{tuple(model.periodic)}")
+        beads = model_bead_parameters(model)
+        dt = self.time_step_s(model)
+        lo, hi = self.platens(model)
+        every = self.every(model)
+        steps = self.max_steps(model)
+        text = render(
+            "compaction", z_bottom=lo, z_top=hi, speed=self.speed_m_s(model),
+            max_pressure=self.max_pressure_pa, local_damping=self.local_damping,
+            bottom_contact=blocks.tool_region(self.tool, beads, "bottom", fix_id="bottom"),
+            top_contact=blocks.tool_region(self.tool, beads, "top", fix_id="top"),
+            area=self.area_m2(model), every=every, thermo_every=max(every, steps // 20),
+            overlap_monitor=blocks.overlap_monitor(model, self.contact, beads, every=every,
+                                                   tool_fixes=("bottom", "top")),
+            guards=blocks.guards(model, dt), max_steps=steps, window=HALT_WINDOW,
+            settle_steps=self.settle_steps(model))
+        return "\n".join([
+            blocks.setup(model, self.protocol, DATA_FILE, dt), blocks.bonds(model),
+            blocks.contact(model, self.contact, beads), text,
+            render("finish", final_data="final.data")])
+
+    # -- run -----------------------------------------------------------------------------
+    def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
+            overwrite: bool = False, check_rate: bool = False,
+            resume: bool = False) -> DrivenResult:
+        """Compress ``model`` and release it; ``check_rate`` is not offered (say so)."""
+        if check_rate:
+            raise InputError("compaction has no --check-rate; rerun with half "
+                             "speed_fraction to check the rate")
+        engine = engine or Engine()
+        text = self.input_text(model)  # validates before anything is written
+        if resume:
+            run_dir = resume_folder(out)
+        else:
+            run_dir = write_run_folder(out, self.protocol, model, text,
+                                       {self.protocol: scene_dict(self)}, overwrite=overwrite)
+        run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
+                         resume=resume)
+        result = None
+        if mpi.is_root():
+            result = self.reduce(Path(run_dir), model)
+            result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
+            result.write()
+        summary = mpi.bcast_json(result.summary if result else None)
+        if result is None:
+            result = DrivenResult(Path(run_dir), {}, summary)
+        result.summary = summary
+        return result
+
+    def reduce(self, run_dir: Path, model: BeadModel) -> DrivenResult:
+        means = read_ave_time(run_dir / "means.dat")
+        dt = self.time_step_s(model)
+        settle = self.settle_steps(model)
+        keep = means["step"] > settle  # the settling intervals are not part of the curve
+        p, h = means["pressure_pa"][keep], means["thickness_m"][keep]
+        pb, ke = means["bottom_pressure_pa"][keep], means["kinetic_j"][keep]
+        phase = means["phase"][keep]
+        loading = phase > 0  # an interval straddling the turn is counted with the loading
+        curve = {"time_s": (means["step"][keep] - settle) * dt, "pressure_pa": p,
+                 "thickness_m": h, "phase": np.where(loading, 1, -1),
+                 "bottom_pressure_pa": pb, "kinetic_energy_j": ke}
+        area = self.area_m2(model)
+        lo, hi = self.platens(model)
+        turn_steps = int(float((run_dir / "turn.txt").read_text().split()[-1]))
+        reached = turn_steps < self.max_steps(model)
+        # work done on the fabric by the top platen, −∫F dz (trapezoid over the means)
+        work = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * area
+                                                * -np.diff(h))])
+        pl, hl = p[loading], h[loading]
+        peak = float(pl.max()) if pl.size else 0.0
+        # the compaction curve: the loading branch from where the load goes through the
+        # fabric for good (both platens carry it, within a factor 2), so that a loose fabric
+        # rattling between the platens first is left out
+        pbl = pb[loading]
+        through = (pl > 0.0) & (pbl > 0.5 * pl) & (pbl < 2.0 * pl)
+        broken = np.nonzero(~through)[0]
+        first = int(broken[-1]) + 1 if broken.size else 0
+        pc, hc = pl[first:], hl[first:]
+        order = np.argsort(pc, kind="stable")
+        rises = np.diff(hc[order])
+        strong = loading & (p > 0.1 * peak)
+        ke_ratio = ke[strong] / np.maximum(work[strong], 1e-300)
+        mismatch = np.abs(pb[strong] - p[strong]) / p[strong]
+        targets = tuple(REPORT_PRESSURES_PA)
+        if self.datasheet_pressure_pa is not None:
+            targets += (self.datasheet_pressure_pa,)
+        summary = {
+            "protocol": self.protocol,
+            "n_beads": model.n_beads,
+            "cell_m": [float(v) for v in (model.box_hi - model.box_lo)[:2]],
+            "area_m2": area,
+            "time_step_s": dt,
+            "platen_speed_m_s": self.speed_m_s(model),
+            "starting_gap_m": hi - lo,
+            "settled_pressure_pa": float(means["pressure_pa"][~keep][-1]) if (~keep).any()
+            else 0.0,
+            "max_pressure_pa": self.max_pressure_pa,
+            "max_pressure_reached_pa": peak,
+            "pressure_reached": bool(reached),
+            "contact_thickness_m": float(hc[0]) if hc.size else None,
+            "contact_pressure_pa": float(pc[0]) if pc.size else None,
+            "min_thickness_m": float(h.min()),
+            "thickness_at_pressure_m": thickness_at(pc, hc, targets),
+            "datasheet_pressure_pa": self.datasheet_pressure_pa,
+            "final_thickness_m": float(h[-1]),
+            "thickness_monotone": bool(rises.size == 0 or rises.max() <= 1e-9 * hi),
+            "monotone_note": "loading branch from where both platens carry the load (within "
+                             "a factor 2) to the turn: sorted by pressure, the thickness "
+                             "never rises",
+            "max_kinetic_to_work": float(ke_ratio.max()) if ke_ratio.size else None,
+            "max_platen_pressure_mismatch": float(mismatch.max()) if mismatch.size else None,
+            "quasi_static_note": "kinetic energy over the platen work, and |bottom − top| / "
+                                 "top pressure, on the loading branch above 10 % of the peak",
+            **overlap_summary(run_dir, self.contact),
+        }
+        problems = [f"{k} = {summary[k]:.2g} > {v:g}" for k, v in QUASI_STATIC_LIMITS.items()
+                    if summary[k] is not None and summary[k] > v]
+        summary["quasi_static"] = {"ok": not problems, "limits": dict(QUASI_STATIC_LIMITS),
+                                   "problems": problems}
+        if problems:
+            warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
+                          f" lower speed_fraction", QuasiStaticWarning, stacklevel=2)
+        if not reached:
+            summary["pressure_note"] = (
+                f"the top platen travelled {self.max_travel_fraction:g} of the starting gap "
+                f"and reached {peak:.3g} Pa < {self.max_pressure_pa:.3g} Pa; raise "
+                f"max_travel_fraction or lower max_pressure_pa")
+        plot = {"path": "curve.png",
+                "series": [{"x": p[loading] / 1e3, "y": h[loading] * 1e3, "label": "loading"},
+                           {"x": p[~loading] / 1e3, "y": h[~loading] * 1e3, "style": "--",
+                            "label": "unloading"}],
+                "xlabel": "pressure [kPa]", "ylabel": "thickness [mm]",
+                "title": ("" if not problems else "NOT QUASI-STATIC, do not use: ")
+                + "Compaction between rigid platens",
+                "notes": f"cell {1e3 * summary['cell_m'][0]:.2f} x "
+                         f"{1e3 * summary['cell_m'][1]:.2f} mm\n{model.n_beads} beads"}
+        return DrivenResult(run_dir, curve, summary, [plot])
