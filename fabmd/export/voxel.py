@@ -173,10 +173,9 @@ def locate(yarn: YarnGeometry, points: np.ndarray) -> tuple[np.ndarray, ...]:
         f = k_float - np.floor(k_float)
         k1 = (k0 + 1) % m
 
-        def radius(st):
-            return (1 - f) * y.radii_m[st, k0] + f * y.radii_m[st, k1]
-
-        big_r = (1 - w) * radius(i) + w * radius(j)
+        r_i = (1 - f) * y.radii_m[i, k0] + f * y.radii_m[i, k1]
+        r_j = (1 - f) * y.radii_m[j, k0] + f * y.radii_m[j, k1]
+        big_r = (1 - w) * r_i + w * r_j
         out = np.where(beyond, np.inf, r / big_r)
         dirs = (1 - w)[:, None] * y.directions[i] + w[:, None] * y.directions[j]
         sl = slice(start, start + len(p))
