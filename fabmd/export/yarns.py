@@ -240,8 +240,11 @@ def reconstruct_yarn(frame: FabricFrame, yarn: str | int, fibre_area_m2: float,
 
 
 def fibre_areas(model) -> dict[str, float]:
-    """Filament area of one virtual fibre per family [m²] (``model.info['families']``)."""
+    """Filament area of one virtual fibre per family [m²] (``model.info['families']`` of a
+    rendered fabric, or ``model.info['fibre_area_m2']`` of a synthetic sheet)."""
     areas = {f: v.get("fibre_area_m2") for f, v in model.info.get("families", {}).items()}
+    if not areas and isinstance(model.info.get("fibre_area_m2"), dict):
+        areas = dict(model.info["fibre_area_m2"])
     missing = [f for f in model.family_names if not areas.get(f)]
     if missing:
         raise InputError(f"model.info['families'][...]['fibre_area_m2'] is missing for "
