@@ -286,8 +286,9 @@ def test_export_command_writes_what_meshio_reads(tmp_path):
 
     crimped_sheet().save(tmp_path / "run", "crimped")
     out = tmp_path / "out"
-    assert main(["export", str(tmp_path / "run"), "--voxel", "20", "--out", str(out)]) == 0
-    for name in ("voxels.vtu", "voxels.inp", "voxels_elements.csv", "export.json",
+    assert main(["export", str(tmp_path / "run"), "--voxel", "20", "--out", str(out),
+                 "--png"]) == 0
+    for name in ("voxels.vtu", "voxels.inp", "voxels_elements.csv", "export.json", "voxels.png",
                  "surfaces/yarn_surfaces.vtu", "surfaces/warp-0.stl"):
         assert (out / name).exists(), name
     assert "yarn_id" in meshio.read(out / "voxels.vtu").cell_data

@@ -53,13 +53,15 @@ def voxel_grid(model, voxels: int | None = None, voxel_size_m: float | None = No
 
 def export_state(model, out: Path, voxels: int | None = None,
                  voxel_size_m: float | None = None, stations: int | None = None,
-                 angles: int = 24, smoothing: int = 2, stem: str = "voxels") -> dict:
+                 angles: int = 24, smoothing: int = 2, samples: int = 1,
+                 stem: str = "voxels", keep_mesh: bool = False) -> dict:
     """Write the exports of one state into ``out`` and return the summary.
 
     Files: ``<stem>.vtu``, ``<stem>.inp`` + ``<stem>_elements.csv``,
     ``surfaces/<yarn>.stl`` + ``surfaces/yarn_surfaces.vtu``, ``export.json`` (the
     summary: grid, cell fibre volume fraction voxel vs beads, direction errors,
-    interpenetration, surfaces, timings).
+    interpenetration, surfaces, timings); ``keep_mesh`` adds the
+    :class:`~fabmd.export.voxel.VoxelMesh` under ``"mesh"`` (not written).
     """
     from ..results.folder import write_json
 
@@ -69,7 +71,7 @@ def export_state(model, out: Path, voxels: int | None = None,
     yarns = reconstruct_yarns(model, stations=stations, angles=angles, smoothing=smoothing)
     t1 = time.perf_counter()
     grid = voxel_grid(model, voxels, voxel_size_m)
-    mesh = voxelise(yarns, grid)
+    mesh = voxelise(yarns, grid, samples=samples)
     t2 = time.perf_counter()
     write_vtu(mesh, out / f"{stem}.vtu")
     write_abaqus(mesh, out / f"{stem}.inp")
@@ -78,7 +80,8 @@ def export_state(model, out: Path, voxels: int | None = None,
     vf_voxel = mesh.cell_fibre_volume_fraction()
     vf_beads = bead_fibre_volume_fraction(model, grid)
     summary = {
-        "voxels": list(grid.counts), "voxel_size_m": grid.size_m.tolist(),
+        "voxels": list(grid.counts), "samples_per_axis": samples,
+        "voxel_size_m": grid.size_m.tolist(),
         "domain_lo_m": grid.lo_m.tolist(), "domain_hi_m": grid.hi_m.tolist(),
         "periodic": list(grid.periodic),
         "fibre_volume_fraction": {"voxels": vf_voxel, "beads": vf_beads,
@@ -96,4 +99,6 @@ def export_state(model, out: Path, voxels: int | None = None,
         "files": [f"{stem}.vtu", f"{stem}.inp", f"{stem}_elements.csv", "surfaces/"],
     }
     write_json(out / "export.json", summary)
+    if keep_mesh:
+        summary["mesh"] = mesh
     return summary
