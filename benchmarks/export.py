@@ -10,7 +10,7 @@ voxel fibre directions and bead tangents (mean, 95th percentile), the share of b
 whose voxel is matrix, the yarn interpenetration (share of the yarn volume) and the
 voxelising time (measured in this process).
 
-    python benchmarks/export.py [--state LABEL=DIR ...] [--per-diameter 2 3 4 6 8]
+    python benchmarks/export.py [--state LABEL=DIR[@k,k,...] ...] [--per-diameter 2 3 4 6 8]
                                 [--samples 1] [--write] [--section Export]
 """
 
@@ -83,7 +83,8 @@ HEADER = ["state", "voxel edge", "voxels", "edge [µm]", "Vf voxels", "Vf beads"
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--state", action="append", default=[], metavar="LABEL=DIR",
-                   help="a run folder holding a state (default: crimp the example cell)")
+                   help="a run folder holding a state (default: crimp the example cell); "
+                        "@k,k,... sets its own voxel edges d/k")
     p.add_argument("--per-diameter", type=float, nargs="+", default=[2, 3, 4, 6, 8])
     p.add_argument("--samples", type=int, default=1, help="sub-voxel samples per axis")
     p.add_argument("--write", action="store_true", help="write the RESULTS.md section")
@@ -95,7 +96,9 @@ def main(argv: list[str] | None = None) -> int:
             [("plain-weave cell, crimped", str(crimped_example(Path(tmp))))]
         rows = []
         for label, folder in states:
-            rows += rows_for(label, Path(folder), args.per_diameter, args.samples)
+            folder, _, ks = folder.partition("@")
+            sizes = [float(k) for k in ks.split(",")] if ks else args.per_diameter
+            rows += rows_for(label, Path(folder), sizes, args.samples)
     body = ((args.note + "\n\n") if args.note else "") + (
         f"Voxel edge d/k with d the smallest fibre (bead) diameter; `fabmd export` uses "
         f"d/4. Sub-voxel samples per axis: {args.samples}. Vf beads = filament volume "

@@ -194,33 +194,59 @@ def _image_shifts(grid: VoxelGrid) -> np.ndarray:
                      for a in options[0] for b in options[1] for c in options[2]])
 
 
-def _classify(yarns: list[YarnGeometry], points: np.ndarray, shifts: np.ndarray,
-              pad_m: float):
-    """Per point: smallest r/R over the yarns, its yarn id, direction, the sum of the yarn
-    fibre volume fractions of every yarn holding it, and the overlap counts."""
-    n = len(points)
+def _candidates(grid: VoxelGrid, offset: np.ndarray, shift: np.ndarray, lo: np.ndarray,
+                hi: np.ndarray) -> np.ndarray:
+    """Flat indices of the voxels whose point (centre + offset), moved by ``shift``, lies
+    in the box [lo, hi] (index ranges of the regular grid: no test of every voxel)."""
+    first = grid.lo_m + offset + shift + 0.5 * grid.size_m  # point of voxel 0 per axis
+    ranges = []
+    for k in range(3):
+        i0 = max(0, int(np.ceil((lo[k] - first[k]) / grid.size_m[k])))
+        i1 = min(grid.counts[k] - 1, int(np.floor((hi[k] - first[k]) / grid.size_m[k])))
+        if i1 < i0:
+            return np.zeros(0, np.int64)
+        ranges.append(np.arange(i0, i1 + 1))
+    nx, ny, _ = grid.counts
+    i, j, k = ranges
+    return ((k[:, None, None] * ny + j[None, :, None]) * nx + i[None, None, :]).ravel()
+
+
+def _classify(yarns: list[YarnGeometry], grid: VoxelGrid, offset: np.ndarray):
+    """For the point centre + ``offset`` of every voxel: its yarn id (smallest r/R over
+    the yarns holding it), direction, the sum of the yarn fibre volume fractions of every
+    yarn holding it, and the overlap counts."""
+    n = grid.n_voxels
+    offset = np.asarray(offset, float)
+    centres = grid.centres() + offset
+    shifts = _image_shifts(grid)
     best = np.full(n, np.inf)
     owner = np.zeros(n, np.int64)
     direction = np.zeros((n, 3))
     fraction = np.zeros(n)
     first_inside = np.zeros(n, np.int64)
     overlaps: dict[tuple[int, int], int] = {}
+    # this yarn's best image of every point; reset where touched after each yarn
+    rho_y = np.full(n, np.inf)
+    dir_y = np.zeros((n, 3))
+    frac_y = np.zeros(n)
     for yarn in yarns:
-        pad = float(yarn.radii_m.max()) + pad_m
+        pad = float(yarn.radii_m.max()) + float(np.max(grid.size_m))
         ext = yarn.extended()
         lo, hi = ext.centres_m.min(axis=0) - pad, ext.centres_m.max(axis=0) + pad
-        rho_y = np.full(n, np.inf)
-        dir_y = np.zeros((n, 3))
-        frac_y = np.zeros(n)
-        for shift in shifts:  # this yarn's best image of every point
-            cand = np.flatnonzero(((points + shift >= lo) & (points + shift <= hi)).all(axis=1))
+        touched = []
+        for shift in shifts:
+            cand = _candidates(grid, offset, shift, lo, hi)
             if not len(cand):
                 continue
-            rho, dirs, frac = locate(yarn, points[cand] + shift)
+            rho, dirs, frac = locate(yarn, centres[cand] + shift)
             better = rho < rho_y[cand]
             take = cand[better]
             rho_y[take], dir_y[take], frac_y[take] = rho[better], dirs[better], frac[better]
-        hit = np.flatnonzero(rho_y <= 1.0)
+            touched.append(cand)
+        if not touched:
+            continue
+        seen = np.unique(np.concatenate(touched))
+        hit = seen[rho_y[seen] <= 1.0]
         fraction[hit] += frac_y[hit]
         take = hit[rho_y[hit] < best[hit]]
         best[take], direction[take], owner[take] = rho_y[take], dir_y[take], yarn.yarn_id
@@ -230,6 +256,7 @@ def _classify(yarns: list[YarnGeometry], points: np.ndarray, shifts: np.ndarray,
             key = (int(min(other, yarn.yarn_id)), int(max(other, yarn.yarn_id)))
             overlaps[key] = overlaps.get(key, 0) + int(count)
         first_inside[hit[first_inside[hit] == 0]] = yarn.yarn_id
+        rho_y[seen] = np.inf
     outside = best > 1.0
     owner[outside] = 0
     direction[outside] = 0.0
@@ -248,17 +275,14 @@ def voxelise(yarns: list[YarnGeometry], grid: VoxelGrid, samples: int = 1) -> Vo
     if int(samples) < 1:
         raise InputError(f"samples must be >= 1, got {samples}")
     samples = int(samples)
-    centres = grid.centres()
-    shifts = _image_shifts(grid)
-    pad = float(np.max(grid.size_m))
-    owner, direction, fraction, overlaps = _classify(yarns, centres, shifts, pad)
+    owner, direction, fraction, overlaps = _classify(yarns, grid, np.zeros(3))
     if samples > 1:
         frac = (np.arange(samples) + 0.5) / samples - 0.5
         offsets = np.stack(np.meshgrid(frac, frac, frac, indexing="ij"), -1).reshape(-1, 3)
         offsets = offsets * grid.size_m
-        fraction = np.zeros(len(centres))
+        fraction = np.zeros(grid.n_voxels)
         for off in offsets:  # one sub-point per voxel at a time (memory stays n_voxels)
-            fraction += _classify(yarns, centres + off, shifts, pad)[2]
+            fraction += _classify(yarns, grid, off)[2]
         fraction /= len(offsets)
     names = [""] * (max((y.yarn_id for y in yarns), default=0))
     for y in yarns:
