@@ -167,8 +167,10 @@ def write_abaqus(mesh: VoxelMesh, path: Path, element_type: str = "C3D8R") -> Pa
                   ", 1., 0., 0., 0., 1., 0."]
         lines += [f"{e}, " + ", ".join(f"{v:.6f}" for v in (*ai, *bi))
                   for e, ai, bi in zip(yarn_el, a, b, strict=True)]
-        lines += ["*Orientation, name=FIBRE_ORIENTATION, system=RECTANGULAR",
-                  "FIBRE_DIRECTIONS",
+        # data lines: the distribution, then no additional rotation (about local 1, 0 deg)
+        lines += ["*Orientation, name=FIBRE_ORIENTATION, system=RECTANGULAR, "
+                  "definition=COORDINATES",
+                  "FIBRE_DIRECTIONS", "1, 0.",
                   "*Solid Section, elset=YARNS, material=YARN, orientation=FIBRE_ORIENTATION",
                   ","]
     if (mesh.yarn_id == 0).any():
