@@ -293,6 +293,9 @@ def test_export_command_writes_what_meshio_reads(tmp_path):
         assert (out / name).exists(), name
     assert "yarn_id" in meshio.read(out / "voxels.vtu").cell_data
     assert main(["export", str(tmp_path / "run"), "--out", str(out)]) == 2  # exists
+    assert main(["export", str(tmp_path / "run"), "--voxel", "0",
+                 "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()  # refused before any file
 
 
 def test_export_state_summary(tmp_path):

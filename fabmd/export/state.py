@@ -66,12 +66,12 @@ def export_state(model, out: Path, voxels: int | None = None,
     from ..results.folder import write_json
 
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    grid = voxel_grid(model, voxels, voxel_size_m)  # bad sizes fail before any file
     t0 = time.perf_counter()
     yarns = reconstruct_yarns(model, stations=stations, angles=angles, smoothing=smoothing)
     t1 = time.perf_counter()
-    grid = voxel_grid(model, voxels, voxel_size_m)
     mesh = voxelise(yarns, grid, samples=samples)
+    out.mkdir(parents=True, exist_ok=True)
     t2 = time.perf_counter()
     write_vtu(mesh, out / f"{stem}.vtu")
     write_abaqus(mesh, out / f"{stem}.inp")
