@@ -109,7 +109,8 @@ class VoxelMesh:
         grid: the voxel grid.
         yarn_id: (n,) 1-based yarn id, 0 = matrix.
         direction: (n, 3) unit fibre direction (0 in the matrix).
-        fibre_volume_fraction: (n,) yarn fibre volume fraction (0 in the matrix).
+        fibre_volume_fraction: (n,) fibre volume fraction (0 in the matrix with one
+            sample per voxel; see :func:`voxelise`).
         yarn_names: name of yarn id 1, 2, ...
         overlap_voxels: {(yarn a, yarn b): voxels whose centre lies in both} (ids, a < b).
     """
