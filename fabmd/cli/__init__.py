@@ -20,6 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "test": ("test_cmd", "a virtual test end to end: crimp, coupon, test (scene file)"),
     "measure": ("measure", "thickness, crimp, volume fraction of the state in a run folder"),
     "build": ("build", "render a fabric scene (TOML) into beads: data file, VTU, preview"),
+    "export": ("export", "voxel mesh (VTU, Abaqus .inp) and yarn surfaces of a fabric state"),
 }
 
 
