@@ -14,6 +14,7 @@ from fabmd.model.beads import model_bead_parameters
 from fabmd.model.fabric_model import bead_parameter_list, render_fabric
 from fabmd.model.material import GLASS, FibreMaterial
 from fabmd.protocols.crimp import Crimp
+from fabmd.protocols.crimp_tension import yarn_axial_stiffness_n
 from fabmd.results.measure import areal_density_kg_m2, passed_through
 from fabmd.scene.outputs import TrajectoryOutput
 from fabmd.scenefile import parse_scene
@@ -71,6 +72,10 @@ def test_heavier_warp_yarn_beads_follow_its_tex():
     assert [p.axial_stiffness_n for p in params] == pytest.approx(
         [p.axial_stiffness_n for p in recovered])
     assert model.info["yarn_spec"] == ["warp", "warp:1", "weft", "weft"]
+    # the crimp's tension search sees the mean yarn stiffness: (3 E·A + 3 · 2 E·A) / 2
+    ea = E * LIGHT * 1e-6 / rho / N_FIBRES
+    assert yarn_axial_stiffness_n(model, "warp") == pytest.approx(1.5 * N_FIBRES * ea)
+    assert yarn_axial_stiffness_n(model, "weft") == pytest.approx(N_FIBRES * ea)
     assert model.info["yarn_specs"]["warp:1"]["yarns"] == ["warp-2"]
 
 
