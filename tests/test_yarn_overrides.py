@@ -211,3 +211,25 @@ def test_bad_overrides_are_refused_before_lammps(body, message):
     assert OVERRIDE in SCENE
     with pytest.raises(InputError, match=message):
         parse_scene(tomllib.loads(SCENE.replace(OVERRIDE, body)))
+
+
+def test_a_heavier_weft_layer_sets_its_own_level_spacing():
+    arch = Architecture3D.through_thickness(weft_layers=4, dents=2)
+    glass = FibreMaterial("30 GPa", "1.9 g/cm3")
+    warp = YarnSpec("600 tex", glass, "1.6 mm", 4, spacing_m="8 mm", fibre_volume_fraction=0.5)
+    weft = YarnSpec("600 tex", glass, "2 mm", 4, spacing_m="4 mm", fibre_volume_fraction=0.5)
+    heavy = YarnSpec("900 tex", glass, "2 mm", 4, spacing_m="4 mm", fibre_volume_fraction=0.5)
+    binder = YarnSpec("300 tex", glass, "0.9 mm", 1, fibre_volume_fraction=0.5)
+    fabric = Fabric(arch, warp, weft, binder, periodic=True, plateau=0.3,
+                    overrides=[YarnOverride("weft", heavy, layers=[2])])
+    model = render_fabric(fabric)  # no overlap
+    lev, c = fabric.levels(), fabric.clearance_m
+    gap, h = lev["gap"], lev["gap_height"]
+    for k, hf in enumerate([weft.height_m, heavy.height_m, weft.height_m, weft.height_m]):
+        # weft layer k + 1 lies half its height plus half the gap's height (+ c) from each gap
+        assert gap[k] - lev["weft"][k] == pytest.approx(0.5 * (h[k] + hf) + c, rel=1e-9)
+        assert lev["weft"][k] - gap[k + 1] == pytest.approx(0.5 * (h[k + 1] + hf) + c,
+                                                            rel=1e-9)
+    names = [y.name for y, key in zip(model.yarns, model.info["yarn_spec"], strict=True)
+             if key == "weft:1"]
+    assert len(names) == arch.columns
