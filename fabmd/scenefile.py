@@ -47,6 +47,17 @@ and ``filament_count`` ("3K"), ``width_m`` (default: its spacing), ``shape`` and
 ``fibre_volume_fraction`` its section is sized for (its height then follows). The
 datasheet is checked (filament area, areal density against Σ tex·count) and the build
 reports its areal density against it.
+Some yarns of a family may differ (a heavier warp yarn, heavier stuffers in the
+middle layers): ``[[yarns.<family>.overrides]]`` tables give ``yarns`` (positions in
+the unit cell from 1: warp/weft number in 2D, dent or column in 3D) and/or ``layers``
+(3D: stuffer gaps as in ``warp_gaps``, weft layers from 1 at the top) and the
+``[yarns.<family>]`` keys that change; the others are taken from the family's table (a
+section sized by ``fibre_volume_fraction`` follows the override's tex)::
+
+    [[yarns.warp.overrides]]
+    yarns = [2]
+    linear_density_tex = "1200 tex"
+
 The same objects can be built in Python (:class:`~fabmd.geometry.fabric.Fabric`,
 :class:`Scene`).
 """
@@ -61,6 +72,7 @@ from pathlib import Path
 from .errors import InputError
 from .geometry.architecture3d import Architecture3D
 from .geometry.fabric import Fabric, YarnSpec
+from .geometry.overrides import YarnOverride
 from .geometry.weave import Weave
 from .model.beads import Discretisation
 from .model.contact import ContactModel
@@ -216,6 +228,24 @@ def _thickness(value, where: str) -> tuple[float, float | None]:
     return t, p
 
 
+def _yarn_spec(where: str, section: str, table: dict, materials: dict) -> YarnSpec:
+    """A :class:`YarnSpec` from a ``[yarns.<family>]`` table (or an override merged
+    into it); ``material`` names a material."""
+    kwargs = dict(table)
+    mat = kwargs.get("material")
+    if mat is None:
+        raise InputError(f"{where}: [{section}] needs material = \"<name>\" (one of "
+                         f"{', '.join(materials)}, or add a [materials.<name>] table)")
+    if mat not in materials:
+        raise InputError(f"{where}: [{section}] material {mat!r} is not defined (known: "
+                         f"{', '.join(materials)}; add a [materials.{mat}] table)")
+    kwargs["material"] = materials[mat]
+    for required in ("linear_density_tex",):
+        if required not in kwargs:
+            raise InputError(f"{where}: [{section}] needs {required}")
+    return _build(where, section, YarnSpec, **kwargs)
+
+
 def _fields(cls) -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(cls))
 
@@ -302,27 +332,35 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
                              f"both set the {fam} count; give one")
         yarn_tables[fam] = dict(table, count_per_m=fab.pop(key))
     specs = {}
+    overrides = []
+    used = set()
     for fam, table in yarn_tables.items():
         if fam not in YARN_FAMILIES:
             raise InputError(f"{where}: [yarns.{fam}] is not a yarn family "
                              f"(allowed: {', '.join(YARN_FAMILIES)})")
         if not isinstance(table, dict):
             raise InputError(f"{where}: [yarns.{fam}] must be a table")
+        table = dict(table)
+        over_tables = table.pop("overrides", [])
         _check_keys(table, _fields(YarnSpec), where, f"yarns.{fam}")
-        kwargs = dict(table)
-        mat = kwargs.get("material")
-        if mat is None:
-            raise InputError(f"{where}: [yarns.{fam}] needs material = \"<name>\" (one of "
-                             f"{', '.join(materials)}, or add a [materials.<name>] table)")
-        if mat not in materials:
-            raise InputError(f"{where}: [yarns.{fam}] material {mat!r} is not defined (known: "
-                             f"{', '.join(materials)}; add a [materials.{mat}] table)")
-        kwargs["material"] = materials[mat]
-        for required in ("linear_density_tex",):
-            if required not in kwargs:
-                raise InputError(f"{where}: [yarns.{fam}] needs {required}")
-        specs[fam] = _build(where, f"yarns.{fam}", YarnSpec, **kwargs)
-    used = {table.get("material") for table in yarn_tables.values() if isinstance(table, dict)}
+        used.add(table.get("material"))
+        specs[fam] = _yarn_spec(where, f"yarns.{fam}", table, materials)
+        if not isinstance(over_tables, list) or not all(isinstance(t, dict)
+                                                        for t in over_tables):
+            raise InputError(f"{where}: [yarns.{fam}] overrides must be a list of tables "
+                             f"([[yarns.{fam}.overrides]]), got {over_tables!r}")
+        for k, over in enumerate(over_tables, start=1):
+            section = f"yarns.{fam}.overrides[{k}]"
+            over = dict(over)
+            choose = {key: over.pop(key) for key in ("yarns", "layers") if key in over}
+            _check_keys(over, _fields(YarnSpec), where, section)
+            merged = dict(table, **over)
+            if "fibre_volume_fraction" in over and "height_m" not in over:
+                merged.pop("height_m", None)  # the override's packing sets its height
+            used.add(merged.get("material"))
+            spec = _yarn_spec(where, section, merged, materials)
+            overrides.append(_build(where, section, YarnOverride, family=fam, spec=spec,
+                                    **choose))
     for name in _section(data, "materials", where):
         if name not in used:  # a misspelt table: the yarn would take a built-in instead
             raise InputError(f"{where}: [materials.{name}] is not used by any yarn (they use "
@@ -350,7 +388,8 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     if "tiling" in fab and isinstance(fab["tiling"], list):
         fab["tiling"] = tuple(fab["tiling"])
     fabric = _build(where, "fabric", Fabric, architecture=arch, warp=specs["warp"],
-                    weft=specs["weft"], binder=specs.get("binder"), **fab)
+                    weft=specs["weft"], binder=specs.get("binder"),
+                    overrides=tuple(overrides), **fab)
 
     disc_table = _section(data, "discretisation", where)
     _check_keys(disc_table, _fields(Discretisation), where, "discretisation")

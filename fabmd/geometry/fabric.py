@@ -30,6 +30,7 @@ from ..errors import InputError
 from ..model.material import FibreMaterial
 from ..units import TEX, quantity
 from .architecture3d import Architecture3D
+from .overrides import YarnOverride
 from .paths import YarnPath
 from .section import Section, section_height
 from .weave import Weave
@@ -223,6 +224,10 @@ class Fabric:
         lift_m: extra separation through the thickness between crossing yarns
             (2D) or neighbouring levels (3D) of the loose state [m], on top of the
             clearance.
+        overrides: :class:`~fabmd.geometry.overrides.YarnOverride` list: other yarn
+            specs for some yarns (by position) or layers (3D) of a family. Their
+            sections set the crossings (2D) and the level heights (3D); their tex the
+            mass. Spec keys: the family name, ``"<family>:<k>"`` for override k (from 1).
     """
 
     architecture: Weave | Architecture3D
@@ -238,6 +243,7 @@ class Fabric:
     thickness_pressure_pa: float | None = None
     auto_clearance: bool = False
     lift_m: float = 0.0
+    overrides: tuple = ()
     #: per family, the width given for the woven yarn where the loose one is narrower [m]
     woven_width_m: dict = field(default_factory=dict, compare=False)
 
@@ -290,6 +296,7 @@ class Fabric:
         object.__setattr__(self, "lift_m", inputs.non_negative(
             "fabric.lift_m", quantity(self.lift_m, "length", "fabric.lift_m")))
         object.__setattr__(self, "woven_width_m", dict(self.woven_width_m))  # own copy
+        self._check_overrides()
         self._datasheet()
         if not self.is_3d:
             self._narrow_loose_yarns()
@@ -311,9 +318,9 @@ class Fabric:
         parts = self.straight_areal_density_kg_m2()
         straight = sum(parts.values())
         crimp = target / straight - 1.0
+        length = self._length_per_area()
         terms = " + ".join(
-            f"{fam} {self.specs()[fam].linear_density_tex:g} tex x "
-            f"{parts[fam] / self.specs()[fam].linear_density_kg_m:.4g} m/m² "
+            f"{fam} {parts[fam] / length[fam] / TEX:.4g} tex x {length[fam]:.4g} m/m² "
             f"= {1e3 * parts[fam]:.4g} g/m²" for fam in parts)
         if crimp < -AREAL_DENSITY_TOLERANCE or crimp > MAX_DATASHEET_CRIMP:
             why = ("lighter than its straight yarns" if crimp < 0 else
@@ -329,41 +336,120 @@ class Fabric:
         (same section area) in the loose state; ``woven_width_m`` keeps the given widths."""
         if factor == 1.0 or self.is_3d:
             return self
-        specs = {}
-        for fam in ("warp", "weft"):
-            spec = getattr(self, fam)
+
+        def narrower(spec: YarnSpec) -> YarnSpec:
             width = factor * spec.width_m
-            specs[fam] = dataclasses.replace(
+            return dataclasses.replace(
                 spec, width_m=width, fibre_volume_fraction=None,
                 height_m=section_height(spec.section.area_m2, width, spec.shape))
-        woven = {f: self.woven_width_m.get(f, getattr(self, f).width_m) for f in specs}
-        return dataclasses.replace(self, woven_width_m=woven, **specs)
+
+        specs = {fam: narrower(getattr(self, fam)) for fam in ("warp", "weft")}
+        woven = {k: self.woven_width_m.get(k, s.width_m)
+                 for k, s in self.yarn_spec_table().items()}
+        over = tuple(dataclasses.replace(o, spec=narrower(o.spec)) for o in self.overrides)
+        return dataclasses.replace(self, woven_width_m=woven, overrides=over, **specs)
 
     def straight_areal_density_kg_m2(self) -> dict[str, float]:
         """Per family, the mass per fabric area of its yarns laid straight, Σ tex·count [kg/m²]."""
         lx, ly = self.unit_cell_m
-        counts = self.yarns_per_unit_cell()
-        out = {}
-        for fam, spec in self.specs().items():
-            along = lx if FAMILY_AXIS[fam] == 0 else ly
-            out[fam] = spec.linear_density_kg_m * counts[fam] * along / (lx * ly)
+        table = self.yarn_spec_table()
+        out = dict.fromkeys(self.specs(), 0.0)
+        for path, key in zip(*self._unit_cell(), strict=True):
+            along = lx if path.axis == 0 else ly
+            out[path.family] += table[key].linear_density_kg_m * along / (lx * ly)
         return out
+
+    def _length_per_area(self) -> dict[str, float]:
+        lx, ly = self.unit_cell_m
+        counts = self.yarns_per_unit_cell()
+        return {fam: counts[fam] * (lx if FAMILY_AXIS[fam] == 0 else ly) / (lx * ly)
+                for fam in self.specs()}
 
     def _narrow_loose_yarns(self) -> None:
         c = self.clearance_m
-        for fam in ("warp", "weft"):
-            spec = getattr(self, fam)
+
+        def narrowed(key: str, spec: YarnSpec) -> YarnSpec:
             room = spec.spacing_m - c
-            sized = spec.fibre_volume_fraction is not None or fam in self.woven_width_m
+            sized = spec.fibre_volume_fraction is not None or key in self.woven_width_m
             if spec.width_m <= room * (1 + 1e-12) or not (self.auto_clearance or sized):
-                continue
+                return spec
             if room <= 0:
-                raise InputError(f"yarns.{fam}: the clearance {c:g} m leaves no room in its "
+                raise InputError(f"yarns.{key}: the clearance {c:g} m leaves no room in its "
                                  f"spacing {spec.spacing_m:g} m")
             height = section_height(spec.section.area_m2, room, spec.shape)
-            self.woven_width_m.setdefault(fam, spec.width_m)
-            object.__setattr__(self, fam, dataclasses.replace(
-                spec, width_m=room, height_m=height, fibre_volume_fraction=None))
+            self.woven_width_m.setdefault(key, spec.width_m)
+            return dataclasses.replace(spec, width_m=room, height_m=height,
+                                       fibre_volume_fraction=None)
+
+        for fam in ("warp", "weft"):
+            object.__setattr__(self, fam, narrowed(fam, getattr(self, fam)))
+        object.__setattr__(self, "overrides", tuple(
+            dataclasses.replace(o, spec=narrowed(f"{o.family}:{k}", o.spec))
+            for k, o in enumerate(self.overrides, start=1)))
+
+    def _check_overrides(self) -> None:
+        overrides = self.overrides
+        if isinstance(overrides, YarnOverride):
+            overrides = (overrides,)
+        if not isinstance(overrides, list | tuple) or not all(
+                isinstance(o, YarnOverride) for o in overrides):
+            raise InputError(f"fabric.overrides must be a list of YarnOverride, "
+                             f"got {overrides!r}")
+        object.__setattr__(self, "overrides", tuple(overrides))
+        a = self.architecture
+        for k, o in enumerate(self.overrides, start=1):
+            where = f"yarns.{o.family}.overrides[{k}]"
+            base = getattr(self, o.family)
+            if base is None or o.family not in self.specs():
+                raise InputError(f"{where}: this fabric has no {o.family} yarns")
+            if o.spec.spacing_m is not None and not math.isclose(
+                    o.spec.spacing_m, base.spacing_m or self.spacing(o.family), rel_tol=1e-9):
+                raise InputError(f"{where}: spacing {o.spec.spacing_m:g} m differs from the "
+                                 f"family's {self.spacing(o.family):g} m (an override changes "
+                                 f"the yarn, not where it lies)")
+            if self.is_3d:
+                n = {"warp": a.dents, "weft": a.columns, "binder": a.dents}[o.family]
+                layers = {"warp": a.warp_gaps,
+                          "weft": tuple(range(1, a.weft_layers + 1))}.get(o.family, ())
+            else:
+                if o.layers:
+                    raise InputError(f"{where}: layers are for 3D fabrics; a 2D weave "
+                                     f"chooses yarns by position (yarns = [...])")
+                n, layers = {"warp": a.n_warp, "weft": a.n_weft}[o.family], ()
+            if o.yarns and max(o.yarns) > n:
+                raise InputError(f"{where}: yarns {list(o.yarns)} must be positions 1..{n} "
+                                 f"in the unit cell")
+            bad = [v for v in o.layers if v not in layers]
+            if bad:
+                kind = "warp gaps (warp_gaps)" if o.family == "warp" else "weft layers"
+                raise InputError(f"{where}: layers {bad} are not among the {kind} "
+                                 f"{list(layers)}")
+
+    def yarn_spec_table(self) -> dict[str, YarnSpec]:
+        """Every yarn spec of the fabric by key: the families present (``specs()``) and
+        ``"<family>:<k>"`` for override k (from 1)."""
+        out = dict(self.specs())
+        for k, o in enumerate(self.overrides, start=1):
+            out[f"{o.family}:{k}"] = o.spec
+        return out
+
+    def _spec_key(self, family: str, position: int, layer: int | None) -> str:
+        key = family
+        for k, o in enumerate(self.overrides, start=1):
+            if o.matches(family, position, layer):
+                key = f"{family}:{k}"
+        return key
+
+    def _family_specs(self, family: str) -> list[YarnSpec]:
+        return [s for k, s in self.yarn_spec_table().items() if k.split(":")[0] == family]
+
+    def cell_spec_keys(self) -> list[str]:
+        """The yarn spec key of every unit-cell yarn, by ``YarnPath.cell_index``."""
+        return self._unit_cell()[1]
+
+    def spec_of(self, path: YarnPath) -> YarnSpec:
+        """The yarn spec of a yarn of :meth:`yarn_paths` (or :meth:`unit_cell_paths`)."""
+        return self.yarn_spec_table()[self.cell_spec_keys()[path.cell_index]]
 
     # -- derived -----------------------------------------------------------------------
     @property
@@ -423,7 +509,11 @@ class Fabric:
 
     def _check_fit(self) -> None:
         c = self.clearance_m
-        weft = self.weft
+        # the widest yarn of a family stands for all (overrides may be wider)
+        widest = {f: max(self._family_specs(f), key=lambda s: s.width_m) for f in self.specs()}
+        weft = widest["weft"]
+        warp = widest.get("warp", self.warp)
+        binder = widest.get("binder")
         if weft.width_m + c > weft.spacing_m * (1 + 1e-12):
             raise InputError(f"yarns.weft.width_m = {weft.width_m:g} m plus the clearance "
                              f"{c:g} m does not fit the weft spacing {weft.spacing_m:g} m: "
@@ -431,26 +521,26 @@ class Fabric:
                              f"increase the spacing")
         if self.is_3d and self.architecture.separate_binders:
             room = self.binder_pitch_m()
-            need = max(0.5 * (self.warp.width_m + self.binder.width_m),
-                       self.binder.width_m) + c
+            need = max(0.5 * (warp.width_m + binder.width_m),
+                       binder.width_m) + c
             if need > room * (1 + 1e-12):
                 raise InputError(
                     f"binder planes lie {room:g} m apart (warp spacing {self.warp.spacing_m:g} "
                     f"m over {self.max_binders_per_dent() + 1}): stuffers "
-                    f"({self.warp.width_m:g} m wide) and binders ({self.binder.width_m:g} m "
+                    f"({warp.width_m:g} m wide) and binders ({binder.width_m:g} m "
                     f"wide) need {need:g} m with the clearance: increase yarns.warp.spacing_m "
                     f"or reduce the widths")
         elif self.is_3d:
             room = 0.5 * self.warp.spacing_m
-            need = 0.5 * (self.warp.width_m + self.binder.width_m) + c
+            need = 0.5 * (warp.width_m + binder.width_m) + c
             if need > room * (1 + 1e-12):
                 raise InputError(
-                    f"stuffer warps ({self.warp.width_m:g} m wide) and binders "
-                    f"({self.binder.width_m:g} m wide) alternate every half warp spacing "
+                    f"stuffer warps ({warp.width_m:g} m wide) and binders "
+                    f"({binder.width_m:g} m wide) alternate every half warp spacing "
                     f"({room:g} m) and need {need:g} m with the clearance: increase "
                     f"yarns.warp.spacing_m or reduce the widths")
-        elif self.warp.width_m + c > self.warp.spacing_m * (1 + 1e-12):
-            raise InputError(f"yarns.warp.width_m = {self.warp.width_m:g} m plus the clearance "
+        elif warp.width_m + c > self.warp.spacing_m * (1 + 1e-12):
+            raise InputError(f"yarns.warp.width_m = {warp.width_m:g} m plus the clearance "
                              f"{c:g} m does not fit the warp spacing {self.warp.spacing_m:g} m: "
                              f"neighbouring warp yarns would overlap; reduce the width or "
                              f"increase the spacing")
@@ -464,43 +554,65 @@ class Fabric:
             return {"crossing_half_separation": [half]}
         a = self.architecture
         binder_gaps = a.binder_gaps()
+        table = self.yarn_spec_table()
+        binder_h = max(s.height_m for s in self._family_specs("binder"))
         heights = []
         for g in range(a.n_gaps):
             h = 0.0
-            if g in a.warp_gaps:
-                h = max(h, self.warp.height_m)
+            if g in a.warp_gaps:  # the tallest stuffer of the gap, over the dents
+                h = max(h, max(table[self._spec_key("warp", d, g)].height_m
+                               for d in range(1, a.dents + 1)))
             if g in binder_gaps:
-                h = max(h, self.binder.height_m)
+                h = max(h, binder_h)
             heights.append(h)
-        hf = self.weft.height_m
+        # each weft layer as high as its tallest weft
+        hfs = [max(table[self._spec_key("weft", col, k)].height_m
+                   for col in range(1, a.columns + 1)) for k in range(1, a.weft_layers + 1)]
         gap_z = [0.0]
         weft_z = []
         for k in range(a.weft_layers):
-            weft_z.append(gap_z[k] - 0.5 * (heights[k] + hf) - c)
-            gap_z.append(weft_z[k] - 0.5 * (heights[k + 1] + hf) - c)
+            weft_z.append(gap_z[k] - 0.5 * (heights[k] + hfs[k]) - c)
+            gap_z.append(weft_z[k] - 0.5 * (heights[k + 1] + hfs[k]) - c)
         mid = 0.5 * (gap_z[0] + gap_z[-1])
         return {"weft": [z - mid for z in weft_z], "gap": [z - mid for z in gap_z],
                 "gap_height": heights}
 
     def unit_cell_paths(self) -> list[YarnPath]:
         """Centrelines of the yarns of one unit cell (length = one period)."""
+        return self._unit_cell()[0]
+
+    def _unit_cell(self) -> tuple[list[YarnPath], list[str]]:
+        """Unit-cell centrelines and the yarn spec key of each."""
         lx, ly = self.unit_cell_m
         f = self.plateau
+        table = self.yarn_spec_table()
         out: list[YarnPath] = []
+        keys: list[str] = []
         if not self.is_3d:
             m = self.architecture.array
-            half = self.levels()["crossing_half_separation"][0]
+            c = self.clearance_m + self.lift_m
+            warp_keys = [self._spec_key("warp", i + 1, None) for i in range(m.shape[0])]
+            weft_keys = [self._spec_key("weft", j + 1, None) for j in range(m.shape[1])]
+            hw = np.array([table[k].height_m for k in warp_keys])
+            hf = np.array([table[k].height_m for k in weft_keys])
+            # each crossing as far apart as its two yarns need
+            half = 0.25 * (hw[:, None] + hf[None, :]) + 0.5 * c
+            ww = np.array([table[k].width_m for k in warp_keys])
+            wf = np.array([table[k].width_m for k in weft_keys])
             sx, sy = self.weft.spacing_m, self.warp.spacing_m
             weft_u = (np.arange(m.shape[1]) + 0.5) * sx
             warp_u = (np.arange(m.shape[0]) + 0.5) * sy
             for i in range(m.shape[0]):
                 out.append(YarnPath(f"warp-{i + 1}", "warp", 0, warp_u[i], lx, lx,
-                                    tuple(weft_u), tuple(np.where(m[i] == 1, half, -half)),
-                                    (f * 0.5 * self.weft.width_m,)))
+                                    tuple(weft_u), tuple(np.where(m[i] == 1, half[i], -half[i])),
+                                    tuple(f * 0.5 * wf)))
+                keys.append(warp_keys[i])
             for j in range(m.shape[1]):
                 out.append(YarnPath(f"weft-{j + 1}", "weft", 1, weft_u[j], ly, ly,
-                                    tuple(warp_u), tuple(np.where(m[:, j] == 1, -half, half)),
-                                    (f * 0.5 * self.warp.width_m,)))
+                                    tuple(warp_u),
+                                    tuple(np.where(m[:, j] == 1, -half[:, j], half[:, j])),
+                                    tuple(f * 0.5 * ww)))
+                keys.append(weft_keys[j])
         else:
             a = self.architecture
             lev = self.levels()
@@ -510,10 +622,12 @@ class Fabric:
                 for g in a.warp_gaps:
                     out.append(YarnPath(f"warp-d{d + 1}-g{g}", "warp", 0, (d + 0.25) * p,
                                         lx, lx, z_m=lev["gap"][g], level=g))
+                    keys.append(self._spec_key("warp", d + 1, g))
             for c in range(a.columns):
                 for k in range(a.weft_layers):
                     out.append(YarnPath(f"weft-c{c + 1}-l{k + 1}", "weft", 1, cols[c], ly, ly,
                                         z_m=lev["weft"][k], level=k))
+                    keys.append(self._spec_key("weft", c + 1, k + 1))
             for d, dent in enumerate(a.binder_paths):
                 for b, path in enumerate(dent):
                     y = (d + 0.75) * p if not a.separate_binders else \
@@ -522,9 +636,11 @@ class Fabric:
                                         y, lx, lx, tuple(cols),
                                         tuple(lev["gap"][g] for g in path),
                                         (f * 0.5 * self.weft.width_m,), level=min(path)))
-        return [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,
-                         y.node_u_m, y.node_z_m, y.plateau_m, y.z_m, y.level, k)
-                for k, y in enumerate(out)]
+                    keys.append(self._spec_key("binder", d + 1, None))
+        paths = [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,
+                          y.node_u_m, y.node_z_m, y.plateau_m, y.z_m, y.level, k)
+                 for k, y in enumerate(out)]
+        return paths, keys
 
     def yarn_paths(self) -> list[YarnPath]:
         """Every yarn of the tile, ordered by family, then position, then from the top.

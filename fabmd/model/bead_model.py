@@ -38,7 +38,8 @@ class BondType:
 
     ``kind`` is ``"fibre"`` for the bonds along a virtual fibre and ``"cohesion"`` for the
     bonds that hold the fibres of one yarn together (:mod:`fabmd.model.cohesion`); measures
-    of fibres (crimp, tension, length) use the fibre bonds only.
+    of fibres (crimp, tension, length) use the fibre bonds only. ``spec`` names the yarn
+    spec whose fibres the type joins.
     """
 
     coefficient: float
@@ -46,6 +47,9 @@ class BondType:
     family: str
     axial_stiffness_n: float = 0.0
     kind: str = "fibre"
+    #: yarn spec key (``Fabric.yarn_spec_table``): the family, or "<family>:<k>" for the
+    #: yarns of override k; "" where unknown (models saved before overrides)
+    spec: str = ""
 
 
 @dataclass(frozen=True)

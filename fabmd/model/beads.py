@@ -172,7 +172,8 @@ def model_bead_parameters(model) -> list[BeadParameters]:
     """Bead parameters of every bond type of a :class:`~fabmd.model.bead_model.BeadModel`.
 
     Recovered from the model itself (rest length, bond coefficient, and the
-    lightest bead and smallest diameter of the type's family), so a stage that
+    lightest bead and smallest diameter of the type's family, or of its yarn spec
+    where the family has several), so a stage that
     receives only a model can still derive its time step and contact stiffness.
     """
     out = []
@@ -184,9 +185,15 @@ def model_bead_parameters(model) -> list[BeadParameters]:
         for end in (0, 1):
             spring += np.bincount(model.bonds[cohesion, end], weights=k_links,
                                   minlength=model.n_beads)
+    table = model.bond_type_table
     for bt in model.fibre_bond_types():
         fam = model.family_names.index(bt.family) + 1 if bt.family in model.family_names else 0
         mask = model.atom_types == fam
+        if bt.spec and any(o.spec != bt.spec for o in table if o.family == bt.family):
+            # a family with several yarn specs: the beads of this spec's fibres
+            same = [k + 1 for k, o in enumerate(table) if o.spec == bt.spec]
+            mask = np.zeros(model.n_beads, bool)
+            mask[model.bonds[np.isin(model.bond_types, same)].ravel()] = True
         if not mask.any():
             mask = np.ones(model.n_beads, bool)
         bending = [at.coefficient * bt.rest_length_m for at in model.angle_type_table

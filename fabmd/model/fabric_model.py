@@ -69,21 +69,36 @@ def family_beads(fabric: Fabric, discretisation: Discretisation | None = None
     return out
 
 
+def yarn_spec_beads(fabric: Fabric, discretisation: Discretisation | None = None
+                    ) -> dict[str, FamilyBeads]:
+    """Like :func:`family_beads`, for every yarn spec of the fabric by its key (the
+    families, and ``"<family>:<k>"`` for override k; see ``Fabric.yarn_spec_table``)."""
+    disc = discretisation or Discretisation()
+    out = {}
+    for key, spec in fabric.yarn_spec_table().items():
+        offsets, d = spec.packing()
+        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d)
+        out[key] = FamilyBeads(key.split(":")[0], fibre, offsets, bead_parameters(fibre, disc))
+    return out
+
+
 def bead_parameter_list(model: BeadModel, fabric: Fabric,
                         discretisation: Discretisation | None = None) -> list[BeadParameters]:
     """One :class:`BeadParameters` per bond type of ``model`` (for contact and time step)."""
     disc = discretisation or Discretisation()
-    fams = family_beads(fabric, disc)
-    return [fams[bt.family].at_spacing(bt.rest_length_m, disc) for bt in model.bond_type_table]
+    fams = yarn_spec_beads(fabric, disc)
+    return [fams[bt.spec or bt.family].at_spacing(bt.rest_length_m, disc)
+            for bt in model.bond_type_table]
 
 
-def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads]) -> None:
+def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads],
+                   keys: list[str]) -> None:
     seen = set()
     for path in paths:
         if path.straight or path.cell_index in seen:
             continue
         seen.add(path.cell_index)
-        reach = float(np.abs(fams[path.family].offsets_m[:, 1]).max())
+        reach = float(np.abs(fams[keys[path.cell_index]].offsets_m[:, 1]).max())
         kappa = path.max_curvature()
         if kappa * reach >= FOLD_LIMIT:
             raise InputError(
@@ -189,23 +204,26 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
     (the two yarns), ``requested_clearance_m``, ``lift_m`` (loose-state lift),
     ``datasheet`` (areal density given, built/given − 1, straight-yarn areal density
     per family, thickness and its pressure), ``yarn_packing`` (per family: yarn fibre
-    volume fraction, filament and section area, shape, width, height, woven width),
+    volume fraction, filament and section area, shape, width, height, woven width;
+    also per override key ``"<family>:<k>"``), ``yarn_specs`` (per override key: as
+    ``families``, plus the names of its yarns), ``yarn_spec`` (per yarn, its spec key),
     ``bond_types_per_family``,
     ``build_s`` and ``fabric`` (the description as plain data).
     """
     t0 = time.perf_counter()
     disc = discretisation or Discretisation()
-    fams = family_beads(fabric, disc)
+    fams = yarn_spec_beads(fabric, disc)
     families = fabric.families
     paths = fabric.yarn_paths()
-    _check_folding(paths, fams)
+    cell_keys = fabric.cell_spec_keys()
+    _check_folding(paths, fams, cell_keys)
     periodic = fabric.periodic
 
     # fibres of each distinct unit-cell yarn, computed once and moved sideways
     shapes: dict[int, list] = {}
     per_yarn = []
     for path in paths:
-        fam = fams[path.family]
+        fam = fams[cell_keys[path.cell_index]]
         if path.cell_index not in shapes:
             base = YarnPath(path.name, path.family, path.axis, 0.0, path.length_m,
                             path.period_m, path.node_u_m, path.node_z_m, path.plateau_m,
@@ -214,25 +232,33 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
                                                   periodic)
         per_yarn.append(shapes[path.cell_index])
 
-    # bond types: per family, grouped by rest length
+    # bond types: per family, per yarn spec (overrides), grouped by rest length
     type_table: list[BondType] = []
     type_params: list[BeadParameters] = []
     fibre_type = []
-    for fam_name in families:
+    for key in fams:
+        fam_name = key.split(":")[0]
+        if fam_name not in families:
+            continue
         lengths = sorted({fb.spacing_m for path, fibres in zip(paths, per_yarn, strict=True)
-                          if path.family == fam_name for fb in fibres})
+                          if cell_keys[path.cell_index] == key for fb in fibres})
         groups: list[float] = []
         for length in lengths:
             if not groups or length > groups[-1] * (1 + REST_LENGTH_TOLERANCE):
                 groups.append(length)
         for length in groups:
-            p = fams[fam_name].at_spacing(length, disc)
-            type_table.append(BondType(p.bond_coefficient, length, fam_name, p.axial_stiffness_n))
+            p = fams[key].at_spacing(length, disc)
+            type_table.append(BondType(p.bond_coefficient, length, fam_name, p.axial_stiffness_n,
+                                       spec=key))
             type_params.append(p)
+    # families first, so that the types of one family stay a contiguous range
+    order = sorted(range(len(type_table)), key=lambda k: families.index(type_table[k].family))
+    type_table = [type_table[k] for k in order]
+    type_params = [type_params[k] for k in order]
 
-    def type_of(fam_name: str, length: float) -> int:
+    def type_of(key: str, length: float) -> int:
         best = min((abs(bt.rest_length_m - length), k) for k, bt in enumerate(type_table)
-                   if bt.family == fam_name)
+                   if bt.spec == key)
         return best[1] + 1
 
     counts = [len(fb.positions) for fibres in per_yarn for fb in fibres]
@@ -254,7 +280,7 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
         for fb in fibres:
             k = len(fb.positions)
             fid += 1
-            btype = type_of(path.family, fb.spacing_m)
+            btype = type_of(cell_keys[path.cell_index], fb.spacing_m)
             fibre_type.append(btype)
             sl = slice(cursor, cursor + k)
             pos[sl] = fb.positions + shift
@@ -319,7 +345,7 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
     if check:
         approach = check_overlaps(model, fabric)
     model.info = fabric_info(fabric, disc, fams, paths, model, approach, thickness,
-                             (z_lo, z_hi))
+                             (z_lo, z_hi), cell_keys)
     model.info["build_s"] = time.perf_counter() - t0
     return model
 
@@ -358,8 +384,16 @@ def _centreline_length(path: YarnPath, step: float) -> float:
 
 def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBeads],
                 paths: list[YarnPath], model: BeadModel, approach: ClosestApproach | None,
-                thickness: float, z_extent: tuple[float, float]) -> dict:
-    """The JSON-able facts stored in ``BeadModel.info`` (see :func:`render_fabric`)."""
+                thickness: float, z_extent: tuple[float, float],
+                cell_keys: list[str] | None = None) -> dict:
+    """The JSON-able facts stored in ``BeadModel.info`` (see :func:`render_fabric`).
+
+    ``fams`` holds every yarn spec by key (:func:`yarn_spec_beads`) and ``cell_keys``
+    the key of each unit-cell yarn (default: ``fabric.cell_spec_keys()``).
+    """
+    if cell_keys is None:
+        cell_keys = fabric.cell_spec_keys()
+    table = fabric.yarn_spec_table()
     from ..protocols.common import scene_dict
 
     arch = fabric.architecture
@@ -374,18 +408,17 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
     size = fabric.size_m
     crimp: dict[str, float] = {}
     mass = 0.0
-    for fam, spec in fabric.specs().items():
+    for fam in fabric.specs():
         step = 0.25 * fams[fam].beads.bond_length_m
         shapes = {p.cell_index: p for p in paths if p.family == fam}
-        ratio = []
-        for p in shapes.values():
-            ratio.append(_centreline_length(p, step) / p.length_m)
-        crimp[fam] = float(np.mean(ratio) - 1.0)
-        total = sum(p.length_m for p in paths if p.family == fam) * (1.0 + crimp[fam])
-        mass += spec.linear_density_kg_m * total
+        ratio = {k: _centreline_length(p, step) / p.length_m for k, p in shapes.items()}
+        crimp[fam] = float(np.mean(list(ratio.values())) - 1.0)
+        # every yarn its own tex and its own shape's length
+        mass += sum(table[cell_keys[p.cell_index]].linear_density_kg_m * p.length_m
+                    * ratio[p.cell_index] for p in paths if p.family == fam)
     per_family = {}
     for fam, fb in fams.items():
-        spec = fabric.specs()[fam]
+        spec = table[fam]
         per_family[fam] = {
             "linear_density_tex": spec.linear_density_tex, "n_fibres": spec.n_fibres,
             "width_m": spec.width_m, "height_m": spec.height_m,
@@ -412,12 +445,15 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
         "thickness_m": fabric.thickness_m,
         "thickness_pressure_pa": fabric.thickness_pressure_pa,
     }
+    yarn_specs = {key: per_family.pop(key) for key in list(per_family) if ":" in key}
+    for key, entry in yarn_specs.items():
+        entry["yarns"] = [p.name for p in paths if cell_keys[p.cell_index] == key]
     packing = {fam: {"yarn_fibre_volume_fraction": spec.yarn_fibre_volume_fraction,
                      "filament_area_m2": spec.filament_area_m2,
                      "section_area_m2": spec.section.area_m2, "shape": spec.shape,
                      "width_m": spec.width_m, "height_m": spec.height_m,
                      "woven_width_m": fabric.woven_width_m.get(fam, spec.width_m)}
-               for fam, spec in fabric.specs().items()}
+               for fam, spec in table.items()}
     return {
         "format": INFO_FORMAT,
         "datasheet": datasheet,
@@ -432,6 +468,8 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
         "spacing_m": {f: fabric.spacing(f) for f in model.family_names},
         "count_per_m": {f: 1.0 / fabric.spacing(f) for f in model.family_names},
         "families": per_family,
+        "yarn_specs": yarn_specs,
+        "yarn_spec": [cell_keys[p.cell_index] for p in paths],
         "yarn_offset_m": [p.offset_m for p in paths],
         "yarn_level": [p.level for p in paths],
         "z_levels_m": fabric.levels(),

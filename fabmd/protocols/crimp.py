@@ -320,7 +320,8 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     from ..model.bead_model import BondType
 
     crimped.bond_type_table = [
-        BondType(bt.coefficient, bt.rest_length_m * scale[i], bt.family, bt.axial_stiffness_n)
+        BondType(bt.coefficient, bt.rest_length_m * scale[i], bt.family, bt.axial_stiffness_n,
+                 spec=bt.spec)
         for i, bt in enumerate(crimped.bond_type_table, start=1)]
     crimped.info = dict(crimped.info, crimp={"expansion": crimp.expansion})
     crimped.save(run_dir, stem=CRIMPED)

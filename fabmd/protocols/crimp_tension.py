@@ -71,11 +71,16 @@ def target_tensions_n(target, model: BeadModel) -> dict[str, float]:
 
 
 def yarn_axial_stiffness_n(model: BeadModel, family: str) -> float:
-    """n_fibres·E·A of a yarn of ``family`` (mean over its yarns) [N]."""
-    ea = [bt.axial_stiffness_n for bt in model.fibre_bond_types() if bt.family == family]
+    """Σ E·A over the fibres of a yarn of ``family`` (mean over its yarns) [N]; yarns of
+    one family may differ (yarn spec overrides)."""
+    fibre = model.fibre_bond_mask()
+    ea_of_type = np.array([bt.axial_stiffness_n for bt in model.bond_type_table])
+    fibre_ea = np.zeros(len(model.fibre_yarn) + 1)
+    fibre_ea[model.fibre_ids[model.bonds[fibre, 0]]] = ea_of_type[model.bond_types[fibre] - 1]
+    yarn_ea = np.bincount(model.fibre_yarn, weights=fibre_ea[1:],
+                          minlength=len(model.yarns) + 1)
     yarns = [k + 1 for k, y in enumerate(model.yarns) if y.family == family]
-    per_yarn = np.bincount(model.fibre_yarn, minlength=len(model.yarns) + 1)[yarns]
-    return float(np.mean(ea)) * float(per_yarn.mean())
+    return float(yarn_ea[yarns].mean())
 
 
 def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
