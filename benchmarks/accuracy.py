@@ -126,8 +126,12 @@ class Config:
         fabric = dataclasses.replace(fabric, **specs)
         disc = dataclasses.replace(base.discretisation, spacing_ratio=self.spacing_ratio,
                                    mass_scaling=self.mass_scaling)
-        contact = dataclasses.replace(base.contact, stiffness_factor=self.contact_factor
-                                      * base.contact.stiffness_factor)
+        contact = base.contact
+        if self.contact_factor != 1.0:
+            # diagnostic variants scale the contact through the legacy per-bead factor
+            # (0.1 = the per-length default at s/d 0.5); the default keeps k' per length
+            contact = dataclasses.replace(contact, stiffness_factor=self.contact_factor
+                                          * (contact.stiffness_factor or 0.1))
         protocols = {k: dict(v) for k, v in base.protocols.items()}
         keep_physical = math.sqrt(self.mass_scaling)  # same physical speed under mass scaling
         for table_name, cells in (("tension", TENSION_CELLS), ("picture_frame", FRAME_CELLS)):

@@ -160,7 +160,11 @@ def test_picture_frame_is_quasi_static_and_balances_energy(frictional):
 
 @pytest.mark.lammps
 def test_without_friction_the_force_is_much_lower(as_woven, frictional, tmp_path):
-    smooth = PictureFrame(max_shear_angle_deg=60, contact=ContactModel(friction=0.0)).run(
+    # the legacy per-bead contact (k_n = 0.1·E·A/l0): this fabric's s/d is 0.57, where the
+    # per-length default is 1.3x stiffer and this frictionless frame's energy balance then
+    # misses by 8-10 % (an open item, issue 16); the friction comparison holds either way
+    smooth = PictureFrame(max_shear_angle_deg=60,
+                          contact=ContactModel(friction=0.0, stiffness_factor=0.1)).run(
         as_woven, tmp_path / "mu0", engine=Engine(progress=False))
     with_mu, without = frictional.summary, smooth.summary
     assert without["mean_frame_force_n"] < 0.5 * with_mu["mean_frame_force_n"]

@@ -5,6 +5,7 @@ result against the bead model (``export.json``)."""
 from __future__ import annotations
 
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,10 @@ def load_state(folder: Path):
             return BeadModel.load(folder / data, folder / meta), data
     raise InputError(f"{folder} holds no fabric state (looked for "
                      f"{', '.join(d for d, _ in STATES)} with their .json)")
+
+
+#: voxel against bead fibre volume fraction beyond which an export warns
+VOLUME_FRACTION_TOLERANCE = 0.02
 
 
 def default_voxel_size_m(model) -> float:
@@ -98,6 +103,14 @@ def export_state(model, out: Path, voxels: int | None = None,
         "timing_s": {"reconstruct": t1 - t0, "voxelise": t2 - t1, "write": t3 - t2},
         "files": [f"{stem}.vtu", f"{stem}.inp", f"{stem}_elements.csv", "surfaces/"],
     }
+    error = summary["fibre_volume_fraction"]["relative_error"]
+    if abs(error) > VOLUME_FRACTION_TOLERANCE:
+        # thin yarns a few voxels across are sampled coarsely (one-fibre yarns at d/4)
+        summary["warnings"] = [
+            f"the voxel fibre volume fraction is {100 * error:+.1f} % off the bead model's "
+            f"(more than {100 * VOLUME_FRACTION_TOLERANCE:g} %): use --samples 2 (sub-voxel "
+            f"sampling) or a smaller --voxel-size"]
+        warnings.warn(summary["warnings"][0], UserWarning, stacklevel=2)
     write_json(out / "export.json", summary)
     if keep_mesh:
         summary["mesh"] = mesh
