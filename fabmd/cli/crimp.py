@@ -26,12 +26,9 @@ def run(args) -> int:
                        form=args.form)
     s = result.summary
     lo, cr = s["loose"], s["crimped"]
-    crimps = ", ".join(f"{f} {lo['crimp_pct'][f]:.2f} -> {cr['crimp_pct'][f]:.2f} %"
-                       for f in cr["crimp_pct"])
-    centre = cr.get("centreline_crimp_pct") or {}
-    if centre:
-        crimps += " (yarn centreline: " + ", ".join(f"{f} {c:.2f} %"
-                                                   for f, c in centre.items()) + ")"
+    from .measure import crimp_text
+
+    crimps = crimp_text(cr, [f"{lo['crimp_pct'][f]:.2f} -> " for f in cr["crimp_pct"]])
     text = (f"crimped {scene.source}: {cr['n_beads']:,} beads, {s['wall_s']:.3g} s wall\n"
             f"  {s.get('stop', s['steps'])}\n"
             f"  thickness {1e3 * lo['thickness_m']:.3f} -> {1e3 * cr['thickness_m']:.3f} mm\n"

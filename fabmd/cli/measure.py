@@ -60,11 +60,7 @@ def run(args) -> int:
         else:
             cut_pngs(model, folder, [(args.cut_normal, pos) for _, pos in cut_files],
                      title=f"{folder.name}: {data}")
-    crimps = ", ".join(f"{f} {c:.2f} %" for f, c in measures["crimp_pct"].items())
-    centre = measures.get("centreline_crimp_pct") or {}
-    if centre:
-        crimps += " (yarn centreline: " + ", ".join(f"{f} {c:.2f} %"
-                                                   for f, c in centre.items()) + ")"
+    crimps = crimp_text(measures)
     text = (f"{folder / data}: {model.n_beads} beads\n"
             f"  thickness {1e3 * measures['thickness_m']:.3f} mm ({measures['measured_over']})\n"
             f"  crimp per fibre {crimps}\n"
@@ -97,3 +93,16 @@ def _check_cuts(model, folder: Path, args) -> list[tuple[Path, float]]:
             raise InputError(f"--cut-at {text}: {exc}{hint}") from None
         out.append((folder / f"cut_{cut_label(args.cut_normal, pos)}.png", pos))
     return out
+
+
+def crimp_text(measures: dict, before: list[str] | None = None) -> str:
+    """Per-fibre crimp of each family (``before[i]`` written ahead of family i's value),
+    then the yarn-centreline crimp where the measures have it."""
+    before = before or [""] * len(measures["crimp_pct"])
+    text = ", ".join(f"{f} {b}{c:.2f} %"
+                     for b, (f, c) in zip(before, measures["crimp_pct"].items(), strict=True))
+    centre = measures.get("centreline_crimp_pct") or {}
+    if centre:
+        text += " (yarn centreline: " + ", ".join(f"{f} {c:.2f} %"
+                                                  for f, c in centre.items()) + ")"
+    return text

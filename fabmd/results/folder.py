@@ -60,18 +60,7 @@ def prepare_run_folder(path: Path | None, overwrite: bool = False,
         OutputExists: the folder exists and ``overwrite`` is False, or it is not
             a fabmd folder.
     """
-    message = ""
-    if mpi.is_root():
-        try:
-            folder = _prepare_on_root(path, overwrite, prefix)
-            (folder / MARKER).write_text("fabmd run folder\n")
-            message = "OK:" + str(folder)
-        except OutputExists as exc:
-            message = "ERR:" + str(exc)
-    message = mpi.bcast_text(message)
-    if message.startswith("ERR:"):
-        raise OutputExists(message[4:])
-    return Path(message[3:])
+    return _marked_on_root(lambda: _prepare_on_root(path, overwrite, prefix))
 
 
 def write_json(path: Path, obj) -> None:
@@ -192,12 +181,18 @@ def begin_run(path: Path, overwrite: bool = False, prefix: str = "run") -> Path:
         OutputExists: ``path`` exists and ``overwrite`` is False, or it is not a
             fabmd folder.
     """
+    return _marked_on_root(lambda: _begin_on_root(Path(path).resolve(), overwrite, prefix))
+
+
+def _marked_on_root(make) -> Path:
+    """Run ``make()`` (returns a folder) on rank 0, mark the folder as fabmd's, and give
+    every rank its path, or raise rank 0's :class:`OutputExists` on every rank."""
     message = ""
     if mpi.is_root():
         try:
-            work = _begin_on_root(Path(path).resolve(), overwrite, prefix)
-            (work / MARKER).write_text("fabmd run folder\n")
-            message = "OK:" + str(work)
+            folder = make()
+            (folder / MARKER).write_text("fabmd run folder\n")
+            message = "OK:" + str(folder)
         except OutputExists as exc:
             message = "ERR:" + str(exc)
     message = mpi.bcast_text(message)
