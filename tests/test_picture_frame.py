@@ -160,12 +160,13 @@ def test_picture_frame_is_quasi_static_and_balances_energy(frictional):
 
 @pytest.mark.lammps
 def test_without_friction_the_force_is_much_lower(as_woven, frictional, tmp_path):
-    # the legacy per-bead contact (k_n = 0.1·E·A/l0): this fabric's s/d is 0.57, where the
-    # per-length default is 1.3x stiffer and this frictionless frame's energy balance then
-    # misses by 8-10 % (an open item, issue 16); the friction comparison holds either way
-    smooth = PictureFrame(max_shear_angle_deg=60,
-                          contact=ContactModel(friction=0.0, stiffness_factor=0.1)).run(
-        as_woven, tmp_path / "mu0", engine=Engine(progress=False))
+    # Without friction a crossing snaps through near 45-50 deg (kinetic energy jumps, the
+    # force drops; the verdict flags that interval) and the contact damping takes that energy
+    # faster than 200 samples of the contact power follow (default: balance 9.7 % off);
+    # 2000 samples follow it (0.2 %).
+    smooth = PictureFrame(max_shear_angle_deg=60, contact=ContactModel(friction=0.0),
+                          samples=2000).run(as_woven, tmp_path / "mu0",
+                                            engine=Engine(progress=False))
     with_mu, without = frictional.summary, smooth.summary
     assert without["mean_frame_force_n"] < 0.5 * with_mu["mean_frame_force_n"]
     assert without["max_frame_force_n"] < 0.5 * with_mu["max_frame_force_n"]
