@@ -32,7 +32,7 @@ D = 0.333e-3
 def test_law_and_its_inverse():
     for law in (GLASS_BUNDLE, CARBON_BUNDLE):
         assert law.pressure_pa(law.vf0) == 0.0
-        for p in (1e3, 1e5, 1e6):
+        for p in (1e3, 1e5, 3e5):  # below both laws' packing limits
             assert law.pressure_pa(law.volume_fraction(p)) == pytest.approx(p, rel=1e-9)
     assert GLASS_BUNDLE.volume_fraction(1e5) == pytest.approx(0.55)
     with pytest.raises(InputError, match="compaction_law.vf0"):
@@ -132,3 +132,22 @@ def test_scene_contact_table_takes_a_compaction_law():
                                       "reference_pressure_pa": "1 kPa"}}
     with pytest.raises(InputError, match=r"\[contact.compaction\].*touch at Vf"):
         parse_scene(data)
+
+
+def test_the_law_stops_at_the_hexagonal_packing_limit():
+    """van Wyk's form has no bound; a bundle of circular fibres cannot pack denser than
+    π/(2√3): pressures beyond the law's value there are refused, below they invert."""
+    import math
+
+    from fabmd.errors import InputError
+    from fabmd.model.compaction import GLASS_BUNDLE, PACKING_LIMIT
+
+    assert PACKING_LIMIT == pytest.approx(0.9069, abs=1e-4)
+    top = GLASS_BUNDLE.max_pressure_pa()
+    assert GLASS_BUNDLE.volume_fraction(0.999 * top) == pytest.approx(
+        (0.999 * top / (GLASS_BUNDLE.coefficient * GLASS_BUNDLE.modulus_pa)
+         + GLASS_BUNDLE.vf0**3) ** (1 / 3), rel=1e-12)
+    assert GLASS_BUNDLE.volume_fraction(top) == pytest.approx(PACKING_LIMIT, rel=1e-9)
+    with pytest.raises(InputError, match="packing limit"):
+        GLASS_BUNDLE.volume_fraction(1.01 * top)
+    assert not math.isnan(top)

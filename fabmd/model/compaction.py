@@ -41,6 +41,8 @@ from ..errors import InputError
 from ..units import quantity
 
 HEX_CELL = math.sqrt(3.0) / 2.0  # area per fibre of a hexagonal packing, over g²
+#: the densest packing of parallel circular fibres (hexagonal), π/(2√3)
+PACKING_LIMIT = math.pi / (2.0 * math.sqrt(3.0))
 
 
 @dataclass(frozen=True)
@@ -85,16 +87,32 @@ class CompactionLaw:
         n = self.exponent
         return max(0.0, self.coefficient * self.modulus_pa * (vf**n - self.vf0**n))
 
+    def max_pressure_pa(self) -> float:
+        """The pressure at which the law reaches :data:`PACKING_LIMIT` [Pa]: the van Wyk
+        form itself has no bound, a bundle of circular fibres cannot pack denser."""
+        return self.pressure_pa(PACKING_LIMIT)
+
     def volume_fraction(self, pressure_pa: float) -> float:
-        """Fibre volume fraction at ``pressure_pa`` [Pa] (inverse of :meth:`pressure_pa`)."""
+        """Fibre volume fraction at ``pressure_pa`` [Pa] (inverse of :meth:`pressure_pa`).
+
+        Raises:
+            InputError: ``pressure_pa`` beyond :meth:`max_pressure_pa` (the law would
+                pack the fibres denser than hexagonal packing).
+        """
         pressure_pa = inputs.non_negative("pressure_pa", pressure_pa)
+        if pressure_pa > self.max_pressure_pa():
+            raise InputError(
+                f"{self.name}: {pressure_pa:.4g} Pa is beyond the law's packing limit "
+                f"(Vf {PACKING_LIMIT:.3f}, reached at {self.max_pressure_pa():.4g} Pa)")
         n = self.exponent
         return (self.vf0**n + pressure_pa / (self.coefficient * self.modulus_pa)) ** (1 / n)
 
 
-#: E-glass rovings: Vf 0.30 → 0.55 at 100 kPa (representative, see the module docstring)
+#: E-glass rovings: Vf 0.30 → 0.55 at 100 kPa (representative, NOT from a checked source:
+#: docs/validation_sources.md finds glass rovings nearer Vf 0.49 at 100 kPa)
 GLASS_BUNDLE = CompactionLaw.through(73e9, 0.30, 0.55, 1e5, name="E-glass bundle")
-#: carbon tows (T300-like): Vf 0.35 → 0.60 at 100 kPa (representative)
+#: carbon tows (T300-like): Vf 0.35 → 0.60 at 100 kPa (representative, NOT from a checked
+#: source: docs/validation_sources.md)
 CARBON_BUNDLE = CompactionLaw.through(230e9, 0.35, 0.60, 1e5, name="carbon bundle")
 
 
@@ -147,7 +165,7 @@ def contact_for_yarn(law: CompactionLaw, area_m2: float, diameter_m: float,
 
 
 def compare(law: CompactionLaw, stiffness_pa: float, area_m2: float, diameter_m: float,
-            pressures_pa=(1e4, 1e5, 1e6)) -> list[dict]:
+            pressures_pa=(1e4, 1e5, 3e5)) -> list[dict]:
     """Vf the law gives and Vf the bead bundle reaches at each pressure (and δ/d)."""
     rows = []
     for p in pressures_pa:
