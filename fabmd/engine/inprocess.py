@@ -216,7 +216,7 @@ def _warn_silent_halt(command: str) -> None:
     """A fix halt that ends only the run (continue/soft) but logs nothing cannot be
     seen when it fires on a chunk's last step: say so."""
     words = command.split()
-    if len(words) > 2 and words[0] == "fix" and words[2] == "halt" \
+    if len(words) > 3 and words[0] == "fix" and words[3] == "halt" \
             and "message" in words and words[words.index("message") + 1:][:1] == ["no"] \
             and "error" in words and words[words.index("error") + 1:][:1] != ["hard"]:
         warnings.warn(f"fix {words[1]} halt with 'message no': fabmd's in-process engine "
