@@ -1,12 +1,16 @@
 """A ``fix halt ... error continue`` ends its run wherever it fires: mid-chunk and on the
 last step of one of the in-process engine's chunks alike, and as plain ``lmp -in`` does."""
 
+import subprocess
+import sys
 import warnings
 
 import pytest
 
 from fabmd.engine import Engine
 from fabmd.engine.inprocess import run_inprocess
+
+from .conftest import clean_env
 
 pytestmark = pytest.mark.lammps
 
@@ -87,3 +91,19 @@ def test_silent_continue_halt_is_warned_about(tmp_path):
         warnings.simplefilter("always")
         run_inprocess(tmp_path / "r", "in.halt")
     assert any("message no" in str(w.message) for w in caught)
+
+
+@pytest.mark.mpi
+def test_halt_on_a_chunk_end_stops_every_mpi_rank(tmp_path, mpirun):
+    # the log (rank 0) tells the halt; every rank must skip the rest of the run alike
+    write_input(tmp_path / "r", 20)
+    code = ("import sys; from fabmd.engine.inprocess import run_inprocess; "
+            "print('done', run_inprocess(sys.argv[1], 'in.halt', monitor=lambda lmp: None, "
+            "monitor_every=20))")
+    out = subprocess.run([str(mpirun), "-np", "2", sys.executable, "-c", code,
+                          str(tmp_path / "r")], capture_output=True, text=True,
+                         env=clean_env(), timeout=120)
+    assert out.returncode == 0, out.stderr
+    halt = first_check_at_or_after(20)
+    assert out.stdout.split().count(f"{halt + CHECK}") == 2  # both ranks ran the same steps
+    assert steps_in(tmp_path / "r", "halted.txt") == halt
