@@ -13,12 +13,18 @@ run repeats the uninterrupted one bit for bit (with the contact history restored
 SIGTERM and SIGINT (:mod:`fabmd.engine.interrupt`) write a checkpoint at the next
 chunk boundary and raise :class:`fabmd.errors.RunInterrupted`. Under ``mpirun``
 every rank does the same; LAMMPS writes files on rank 0 only.
+
+A ``fix halt ... error continue`` ends the current ``run`` early, and the rest of
+that run is skipped, as plain LAMMPS does. A chunk that ends early shows it; a halt
+on a chunk's last step does not (the chunk ends there anyway), so then the halt's
+message in the log (``message yes``, LAMMPS's default) tells it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
 import time
 import warnings
 from collections.abc import Callable
@@ -38,6 +44,9 @@ from .diagnosis import to_exception
 from .history import align_pair_instances, history_fixes, pair_instance
 from .library import new_instance
 from .script import logical_lines, plain_run_steps, total_run_steps
+
+#: what LAMMPS logs when a fix halt fires (``message yes``)
+_HALT_MESSAGE = re.compile(r"Fix halt condition for fix-id \S+ met on step (\d+)")
 
 ProgressCallback = Callable[[int, int], None]
 #: called between chunks with the LAMMPS instance (every rank; collective calls allowed)
@@ -82,9 +91,8 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
     state = CheckpointState.load(run_dir) if resume else None
     if state is not None and state.input_name != input_name:
         raise to_exception(f"ERROR: the checkpoint belongs to {state.input_name}", run_dir)
-    args = ["-log", "log.lammps", "-nocite"]
-    if resume:
-        args = ["-log", "log.resume.lammps", "-nocite"]
+    log_name = "log.resume.lammps" if resume else "log.lammps"
+    args = ["-log", log_name, "-nocite"]
     if not screen:
         args += ["-screen", "none"]
     if threads > 1:
@@ -119,6 +127,7 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                 command = commands[index]
                 steps = plain_run_steps(command)
                 if steps is None:
+                    _warn_silent_halt(command)
                     send(command)
                     continue
                 if state is not None and index == state.command_index:
@@ -131,10 +140,12 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
                 while sent < steps:
                     n = min(size, steps - sent)
                     post = "yes" if sent + n == steps else "no"
+                    log_at = _log_size(lmp, log_name)
                     send(f"run {n} start {start} stop {start + steps} pre yes post {post}")
                     sent += n
                     reached = lmp.extract_global("ntimestep") - start
-                    if reached < sent:
+                    if reached < sent or (sent < steps and _halted_on(
+                            lmp, log_name, log_at, start + reached)):
                         # a 'fix halt ... error continue' ended the run early (e.g. the
                         # quasi-static criterion was met): skip the rest, as lmp would
                         total -= steps - reached
@@ -176,6 +187,41 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
             if state is not None and mpi.is_root():  # the dump frames from before the resume
                 join_dump_parts(run_dir, commands[: state.command_index])
     return done
+
+
+def _log_size(lmp, log_name: str) -> int:
+    """Bytes in the log so far (rank 0; 0 elsewhere or without a log)."""
+    if not mpi.is_root():
+        return 0
+    lmp.flush_buffers()
+    with contextlib.suppress(OSError):
+        return os.path.getsize(log_name)
+    return 0
+
+
+def _halted_on(lmp, log_name: str, offset: int, step: int) -> bool:
+    """Whether a fix halt fired on ``step``, by its message in the log after ``offset``
+    (read on rank 0, told to every rank)."""
+    text = ""
+    if mpi.is_root():
+        lmp.flush_buffers()
+        with contextlib.suppress(OSError), open(log_name, "rb") as log:
+            log.seek(offset)
+            text = log.read().decode(errors="replace")
+    found = any(int(m.group(1)) == step for m in _HALT_MESSAGE.finditer(text))
+    return mpi.bcast_text("1" if found else "0") == "1"
+
+
+def _warn_silent_halt(command: str) -> None:
+    """A fix halt that ends only the run (continue/soft) but logs nothing cannot be
+    seen when it fires on a chunk's last step: say so."""
+    words = command.split()
+    if len(words) > 3 and words[0] == "fix" and words[3] == "halt" \
+            and "message" in words and words[words.index("message") + 1:][:1] == ["no"] \
+            and "error" in words and words[words.index("error") + 1:][:1] != ["hard"]:
+        warnings.warn(f"fix {words[1]} halt with 'message no': fabmd's in-process engine "
+                      f"may miss it when it fires on the last step of a progress chunk; "
+                      f"use 'message yes'", UserWarning, stacklevel=3)
 
 
 def _align_history(state: CheckpointState) -> None:

@@ -54,8 +54,6 @@ from .common import (
 from .driven import DrivenResult
 from .periodic import check_periodic_cell
 
-#: steps over which the pressure that stops the loading is averaged (prime: see the template)
-HALT_WINDOW = 97
 #: above these the loading branch is not quasi-static: kinetic energy over the platen work,
 #: and the two platens' pressures differing (the fabric still accelerating)
 QUASI_STATIC_LIMITS = {"max_kinetic_to_work": 0.1, "max_platen_pressure_mismatch": 0.1}
@@ -188,7 +186,7 @@ class Compaction:
             area=self.area_m2(model), every=every, thermo_every=max(every, steps // 20),
             overlap_monitor=blocks.overlap_monitor(model, self.contact, beads, every=every,
                                                    tool_fixes=("bottom", "top")),
-            guards=blocks.guards(model, dt), max_steps=steps, window=HALT_WINDOW,
+            guards=blocks.guards(model, dt), max_steps=steps,
             settle_steps=self.settle_steps(model))
         return "\n".join([
             blocks.setup(model, self.protocol, DATA_FILE, dt), blocks.bonds(model),
