@@ -51,7 +51,7 @@ from .common import (
     scene_dict,
     write_run_folder,
 )
-from .driven import DrivenResult
+from .driven import DrivenResult, shared_result
 from .periodic import check_periodic_cell
 
 #: above these the loading branch is not quasi-static: kinetic energy over the platen work,
@@ -215,11 +215,7 @@ class Compaction:
             result = self.reduce(Path(run_dir), model)
             result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
             result.write()
-        summary = mpi.bcast_json(result.summary if result else None)
-        if result is None:
-            result = DrivenResult(Path(run_dir), {}, summary)
-        result.summary = summary
-        return result
+        return shared_result(result, run_dir)
 
     def reduce(self, run_dir: Path, model: BeadModel) -> DrivenResult:
         means = read_ave_time(run_dir / "means.dat")

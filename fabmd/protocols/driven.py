@@ -288,11 +288,7 @@ class DrivenTest:
                 result.summary["rate_check"] = self.compare_rates(result, other)
         if mpi.is_root():
             result.write()
-        summary = mpi.bcast_json(result.summary if result else None)
-        if result is None:
-            result = DrivenResult(Path(run_dir), {}, summary)
-        result.summary = summary
-        return result
+        return shared_result(result, run_dir)
 
     def compare_rates(self, fast: DrivenResult, slow: DrivenResult) -> dict:
         """How much the curve and the named summary values moved at half speed."""
@@ -422,6 +418,16 @@ def mark_plots(result: DrivenResult, verdict: dict,
         else:  # no plot that looks valid
             spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
         spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"][:4]])
+
+
+def shared_result(result: DrivenResult | None, run_dir: Path) -> DrivenResult:
+    """Rank 0's result on every rank: its summary broadcast (other ranks get a result
+    with that summary and no curve)."""
+    summary = mpi.bcast_json(result.summary if result else None)
+    if result is None:
+        result = DrivenResult(Path(run_dir), {}, summary)
+    result.summary = summary
+    return result
 
 
 def relative_change(a, b) -> float | None:

@@ -36,12 +36,7 @@ def _prepare_on_root(path: Path | None, overwrite: bool, prefix: str) -> Path:
         return Path(tempfile.mkdtemp(prefix=f"fabmd-{prefix}-"))
     path = Path(path).resolve()
     if path.exists() and (not path.is_dir() or not _only_marker(path)):
-        if not overwrite:
-            raise OutputExists(f"results folder {path} exists already; choose another --out "
-                               f"or pass --overwrite (overwrite=True) to replace it")
-        if not path.is_dir() or not (path / MARKER).exists():
-            raise OutputExists(f"{path} exists and is not a fabmd results folder (no {MARKER}); "
-                               f"fabmd will not delete it even with --overwrite")
+        _check_replaceable(path, overwrite)
         shutil.rmtree(path)
     path.mkdir(parents=True, exist_ok=True)
     return path
@@ -155,15 +150,20 @@ def _remove_ours(path: Path) -> None:
     shutil.rmtree(path)
 
 
-def _begin_on_root(path: Path, overwrite: bool, prefix: str) -> Path:
-    if not path.exists() or (path.is_dir() and _only_marker(path)):
-        return _prepare_on_root(path, False, prefix)
+def _check_replaceable(path: Path, overwrite: bool) -> None:
+    """Raise :class:`OutputExists` unless ``overwrite`` and ``path`` is a fabmd folder."""
     if not overwrite:
         raise OutputExists(f"results folder {path} exists already; choose another --out "
                            f"or pass --overwrite (overwrite=True) to replace it")
     if not path.is_dir() or not (path / MARKER).exists():
         raise OutputExists(f"{path} exists and is not a fabmd results folder (no {MARKER}); "
                            f"fabmd will not delete it even with --overwrite")
+
+
+def _begin_on_root(path: Path, overwrite: bool, prefix: str) -> Path:
+    if not path.exists() or (path.is_dir() and _only_marker(path)):
+        return _prepare_on_root(path, False, prefix)
+    _check_replaceable(path, overwrite)
     work = sibling(path, PARTIAL)
     _remove_ours(work)  # a stale attempt of an earlier replacement
     work.mkdir(parents=True)
