@@ -69,6 +69,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from . import schema
 from .errors import InputError
 from .geometry.architecture3d import Architecture3D
 from .geometry.fabric import Fabric, YarnSpec
@@ -196,13 +197,14 @@ def _section(data: dict, name: str, where: str) -> dict:
 
 
 def _check_keys(table: dict, allowed, where: str, section: str) -> None:
-    for key in table:
-        if key not in allowed:
-            raise InputError(f"{where}: [{section}] has no key {key!r} "
-                             f"(allowed: {', '.join(allowed)})")
+    try:
+        schema.check_keys(table, allowed, section)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
 
 
 def _build(where: str, section: str, factory, **kwargs):
+    """``factory(**kwargs)`` (an architecture constructor), its errors in scene-file terms."""
     try:
         return factory(**kwargs)
     except InputError as exc:
@@ -232,18 +234,18 @@ def _yarn_spec(where: str, section: str, table: dict, materials: dict) -> YarnSp
     """A :class:`YarnSpec` from a ``[yarns.<family>]`` table (or an override merged
     into it); ``material`` names a material."""
     kwargs = dict(table)
-    mat = kwargs.get("material")
+    mat = kwargs.pop("material", None)
     if mat is None:
         raise InputError(f"{where}: [{section}] needs material = \"<name>\" (one of "
                          f"{', '.join(materials)}, or add a [materials.<name>] table)")
     if mat not in materials:
         raise InputError(f"{where}: [{section}] material {mat!r} is not defined (known: "
                          f"{', '.join(materials)}; add a [materials.{mat}] table)")
-    kwargs["material"] = materials[mat]
     for required in ("linear_density_tex",):
         if required not in kwargs:
             raise InputError(f"{where}: [{section}] needs {required}")
-    return _build(where, section, YarnSpec, **kwargs)
+    return schema.build(YarnSpec, kwargs, section, where=where,
+                        defaults={"material": materials[mat]})
 
 
 def _fields(cls) -> tuple[str, ...]:
@@ -282,7 +284,7 @@ def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
                              f"{', '.join(kwargs)} (use law = \"custom\")")
         law = laws[law_name]
     elif law_name == "custom":
-        law = _build(where, section, CompactionLaw, **kwargs)
+        law = schema.build(CompactionLaw, kwargs, section, where=where)
     else:
         raise InputError(f"{where}: [{section}] law must be one of glass, carbon, custom, "
                          f"got {law_name!r}")
@@ -302,25 +304,42 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     """Validate a scene given as a dict (e.g. parsed TOML); see the module docstring."""
     where = source
     for key, value in data.items():
-        if key in OWNED:
+        if key in OWNED or isinstance(value, dict):  # an owned or a protocol table
             continue
-        if isinstance(value, dict):
-            continue  # a protocol section
         if key not in TOP_LEVEL_KEYS:
             raise InputError(f"{where}: unknown top-level key {key!r} (allowed: "
                              f"{', '.join(TOP_LEVEL_KEYS)}, or tables "
                              f"{', '.join('[' + s + ']' for s in OWNED)} and protocol tables)")
     protocols = {k: v for k, v in data.items() if k not in OWNED and isinstance(v, dict)}
+    materials = _materials(data, where)
+    fab = dict(_section(data, "fabric", where))
+    specs, overrides = _yarns(data, fab, materials, where)
+    fabric = _fabric(fab, specs, overrides, where)
+    disc = schema.build(Discretisation, _section(data, "discretisation", where),
+                        "discretisation", where=where)
+    contact = _contact(_section(data, "contact", where), fabric, disc, where)
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        raise InputError(f"{where}: title must be text, got {title!r}")
+    return Scene(fabric=fabric, discretisation=disc, contact=contact, materials=materials,
+                 protocols=protocols, title=title, source=source)
 
+
+def _materials(data: dict, where: str) -> dict:
+    """The built-in materials and those of ``[materials.NAME]``."""
     materials = dict(BUILTIN_MATERIALS)
     for name, table in _section(data, "materials", where).items():
         if not isinstance(table, dict):
             raise InputError(f"{where}: [materials.{name}] must be a table")
-        _check_keys(table, ("modulus_pa", "density_kg_m3"), where, f"materials.{name}")
-        materials[name] = _build(where, f"materials.{name}", FibreMaterial, name=name, **table)
+        materials[name] = schema.build(FibreMaterial, table, f"materials.{name}", where=where,
+                                       defaults={"name": name},
+                                       keys=("modulus_pa", "density_kg_m3"))
+    return materials
 
+
+def _yarn_tables(data: dict, fab: dict, where: str) -> dict:
+    """``[yarns.*]`` with ``[fabric] ends_per_m``/``picks_per_m`` moved into their counts."""
     yarn_tables = dict(_section(data, "yarns", where))
-    fab = dict(_section(data, "fabric", where))
     for key, fam in (("ends_per_m", "warp"), ("picks_per_m", "weft")):
         if key not in fab:
             continue
@@ -331,10 +350,13 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
             raise InputError(f"{where}: [fabric] {key} and [yarns.{fam}] count_per_m/spacing_m "
                              f"both set the {fam} count; give one")
         yarn_tables[fam] = dict(table, count_per_m=fab.pop(key))
-    specs = {}
-    overrides = []
-    used = set()
-    for fam, table in yarn_tables.items():
+    return yarn_tables
+
+
+def _yarns(data: dict, fab: dict, materials: dict, where: str) -> tuple[dict, list]:
+    """Yarn specs by family and the overrides of ``[[yarns.<family>.overrides]]``."""
+    specs, overrides, used = {}, [], set()
+    for fam, table in _yarn_tables(data, fab, where).items():
         if fam not in YARN_FAMILIES:
             raise InputError(f"{where}: [yarns.{fam}] is not a yarn family "
                              f"(allowed: {', '.join(YARN_FAMILIES)})")
@@ -359,8 +381,8 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
                 merged.pop("height_m", None)  # the override's packing sets its height
             used.add(merged.get("material"))
             spec = _yarn_spec(where, section, merged, materials)
-            overrides.append(_build(where, section, YarnOverride, family=fam, spec=spec,
-                                    **choose))
+            overrides.append(schema.build(YarnOverride, choose, section, where=where,
+                                          defaults={"family": fam, "spec": spec}))
     for name in _section(data, "materials", where):
         if name not in used:  # a misspelt table: the yarn would take a built-in instead
             raise InputError(f"{where}: [materials.{name}] is not used by any yarn (they use "
@@ -369,6 +391,11 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     for fam in ("warp", "weft"):
         if fam not in specs:
             raise InputError(f"{where}: [yarns.{fam}] is missing")
+    return specs, overrides
+
+
+def _fabric(fab: dict, specs: dict, overrides: list, where: str) -> Fabric:
+    """The :class:`Fabric` of ``[fabric]`` (its architecture keys, datasheet, tiling)."""
     if "thickness" in fab:  # "1.2 mm at 4.14 kPa"
         if "thickness_m" in fab or "thickness_pressure_pa" in fab:
             raise InputError(f"{where}: [fabric] give thickness = \"<t> at <p>\" or "
@@ -385,25 +412,17 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     if isinstance(arch, Architecture3D) and "binder" not in specs:
         raise InputError(f"{where}: [yarns.binder] is required: the 3D architecture has "
                          f"{arch.n_binders} binder yarns")
-    if "tiling" in fab and isinstance(fab["tiling"], list):
-        fab["tiling"] = tuple(fab["tiling"])
-    fabric = _build(where, "fabric", Fabric, architecture=arch, warp=specs["warp"],
-                    weft=specs["weft"], binder=specs.get("binder"),
-                    overrides=tuple(overrides), **fab)
+    return schema.build(Fabric, fab, "fabric", where=where, defaults=dict(
+        architecture=arch, warp=specs["warp"], weft=specs["weft"], binder=specs.get("binder"),
+        overrides=tuple(overrides)))
 
-    disc_table = _section(data, "discretisation", where)
-    _check_keys(disc_table, _fields(Discretisation), where, "discretisation")
-    disc = _build(where, "discretisation", Discretisation, **disc_table)
-    contact_table = dict(_section(data, "contact", where))
+
+def _contact(table: dict, fabric: Fabric, disc: Discretisation, where: str) -> ContactModel:
+    """``[contact]``, its normal stiffness from ``compaction = {...}`` when given."""
+    contact_table = dict(table)
     law_table = contact_table.pop("compaction", None)
     _check_keys(contact_table, _fields(ContactModel), where, "contact")
     if law_table is not None:
         contact_table["normal_stiffness_pa"] = _stiffness_from_law(
             where, law_table, fabric, disc, contact_table)
-    contact = _build(where, "contact", ContactModel, **contact_table)
-    title = data.get("title", "")
-    if not isinstance(title, str):
-        raise InputError(f"{where}: title must be text, got {title!r}")
-    return Scene(fabric=fabric, discretisation=disc, contact=contact,
-                 materials={k: v for k, v in materials.items()}, protocols=protocols,
-                 title=title, source=source)
+    return schema.build(ContactModel, contact_table, "contact", where=where)

@@ -15,6 +15,7 @@ linear_density      kg/m, g/m, tex (g/km), dtex, ktex, den (g/9 km)
 modulus / pressure  Pa, kPa, MPa, GPa
 density             kg/m3, g/cm3
 force               N, mN, kN
+stiffness           N/m, mN/m, kN/m (a spring: force per metre of deflection)
 time                s, ms, us, min
 speed               m/s, mm/s, mm/min, m/min
 angle               rad, deg
@@ -41,6 +42,7 @@ _UNITS: dict[str, dict[str, float]] = {
     "pressure": {"pa": 1.0, "kpa": 1e3, "mpa": 1e6, "gpa": 1e9},
     "density": {"kg/m3": 1.0, "kg/m^3": 1.0, "g/cm3": 1e3, "g/cm^3": 1e3},
     "force": {"n": 1.0, "mn": 1e-3, "kn": 1e3},
+    "stiffness": {"n/m": 1.0, "mn/m": 1e-3, "kn/m": 1e3},
     "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "min": 60.0},
     "speed": {"m/s": 1.0, "mm/s": 1e-3, "mm/min": 1e-3 / 60.0, "m/min": 1.0 / 60.0},
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
@@ -49,7 +51,7 @@ _UNITS: dict[str, dict[str, float]] = {
     "areal_density": {"kg/m2": 1.0, "g/m2": 1e-3, "gsm": 1e-3},
 }
 # case-insensitive kinds (SI prefixes of Pa and N never clash there)
-_CASE_FREE = {"pressure", "force"}
+_CASE_FREE = {"pressure", "force", "stiffness"}
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
 
