@@ -13,7 +13,8 @@ def test_help_lists_commands():
 @pytest.mark.parametrize("setting,words", [
     ("modulus_pa=-70e9", "material.modulus_pa must be > 0"),
     ("spacing_ratio=1.5", "spacing_ratio must be in (0, 1]"),
-    ("time_step_s=1e-3", "above the stable time step"),
+    ("time_step.value_s=1e-3", "above the stable time step"),
+    ("time_step_s=1e-3", "--set time_step_s is now --set time_step.value_s"),
     ("diameter_m=0", "diameter_m must be > 0"),
 ])
 def test_bad_input_is_one_line_before_lammps(tmp_path, setting, words):

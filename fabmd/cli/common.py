@@ -60,3 +60,16 @@ def scene_from(args):
     from ..scenefile import load_scene
 
     return apply_preset(load_scene(args.scene), args.preset)
+
+
+def add_stage_options(p: argparse.ArgumentParser) -> None:
+    """Options of the commands that run a scene's stages (``crimp``, ``test``): ``--json``,
+    the presets and the run options (``--out`` required)."""
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_preset_options(p)
+    add_run_options(p, out_required=True)
+
+
+def stage_inputs(args):
+    """The scene (preset applied) and the engine of a stage command."""
+    return scene_from(args), engine_from(args)

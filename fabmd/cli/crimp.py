@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import add_preset_options, add_run_options, emit, engine_from, scene_from
+from .common import add_stage_options, emit, stage_inputs
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -13,17 +13,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                            "and optionally [crimp]")
     p.add_argument("--form", choices=["fabric", "cell"], default="fabric",
                    help="crimp the fabric as described (default) or its periodic unit cell")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    add_preset_options(p)
-    add_run_options(p, out_required=True)
+    add_stage_options(p)
 
 
 def run(args) -> int:
     from ..pipeline import run_crimp
     from ..results.yarn_tension import tension_line
-    scene = scene_from(args)
-    result = run_crimp(scene, args.out, engine=engine_from(args), overwrite=args.overwrite,
-                       form=args.form)
+    scene, engine = stage_inputs(args)
+    result = run_crimp(scene, args.out, engine=engine, overwrite=args.overwrite, form=args.form)
     s = result.summary
     lo, cr = s["loose"], s["crimped"]
     from .measure import crimp_text

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import add_preset_options, add_run_options, emit, engine_from, scene_from
+from .common import add_stage_options, emit, stage_inputs
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -26,17 +26,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "and coupon (the old test is replaced only if the new one succeeds)")
     p.add_argument("--strict", action="store_true",
                    help="a curve that is not quasi-static is a failure (exit status 4)")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    add_preset_options(p)
-    add_run_options(p, out_required=True)
+    add_stage_options(p)
 
 
 def run(args) -> int:
     import dataclasses
 
     from ..pipeline import run_test
-    scene = scene_from(args)
-    engine = dataclasses.replace(engine_from(args), checkpoint_every=args.checkpoint_every)
+    scene, engine = stage_inputs(args)
+    engine = dataclasses.replace(engine, checkpoint_every=args.checkpoint_every)
     summary = run_test(scene, args.name, args.out, engine=engine, overwrite=args.overwrite,
                        check_rate=args.check_rate, resume=args.resume, crimped=args.crimped,
                        strict=args.strict, redo=args.redo)

@@ -18,24 +18,34 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("check", choices=sorted(CHECKS), help="which check to run")
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change a parameter of the check (SI units; repeatable), "
-                        "e.g. --set spacing_ratio=0.25")
+                   help="change a parameter of the check (SI, or text with a unit; "
+                        "repeatable), e.g. --set spacing_ratio=0.25, --set diameter_m='0.1 mm',"
+                        " --set time_step.factor=0.2")
     add_run_options(p)
 
 
-def parse_settings(pairs: list[str]) -> dict[str, float]:
-    """``["a=1", "b=2e-3"]`` -> ``{"a": 1.0, "b": 0.002}``; one-line errors."""
+def parse_settings(pairs: list[str]) -> dict:
+    """``["a=1", "b=2 mm", "time_step.factor=0.2"]`` -> ``{"a": 1.0, "b": "2 mm",
+    "time_step": {"factor": 0.2}}``: numbers as floats, other text as given (a quantity
+    with its unit, read by the check's schema); a dot opens a sub-table. One-line errors."""
     from ..errors import InputError
 
-    out: dict[str, float] = {}
+    out: dict = {}
     for pair in pairs:
         key, sep, value = pair.partition("=")
-        if not sep or not key:
-            raise InputError(f"--set expects KEY=VALUE, got {pair!r}")
+        key = key.strip()
+        if not sep or not key or "" in key.split("."):
+            raise InputError(f"--set expects KEY=VALUE (KEY may be table.key), got {pair!r}")
+        *tables, last = key.split(".")
+        where = out
+        for name in tables:
+            where = where.setdefault(name, {})
+            if not isinstance(where, dict):
+                raise InputError(f"--set {key}: {name} is a value, not a table")
         try:
-            out[key.strip()] = float(value)
+            where[last] = float(value)
         except ValueError:
-            raise InputError(f"--set {key}: expected a number, got {value!r}") from None
+            where[last] = value.strip()
     return out
 
 

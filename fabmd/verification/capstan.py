@@ -8,12 +8,14 @@ cases then run in seconds.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..engine import Engine, mpi
 from ..protocols.capstan import Capstan
 from ..results.folder import prepare_run_folder
-from .settings import check_known, fibre_from
+from ..schema import unit
+from .settings import FibreSettings, read
 
 TOLERANCE = 0.05
 FRICTIONS = (0.1, 0.3)
@@ -21,26 +23,37 @@ WRAP_ANGLES = (math.pi / 2, math.pi)
 #: the softened modulus of the check [Pa] (the ratio is independent of E)
 MODULUS_PA = 1e9
 
-#: settings ``--set KEY=VALUE`` may change
-SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "spacing_ratio", "radius_m",
-            "load_strain", "speed_fraction", "tool_stiffness_factor", "time_step_factor")
+
+@dataclass(frozen=True)
+class Settings(FibreSettings):
+    """What ``--set KEY=VALUE`` may change (SI; units as text accepted); see
+    :class:`~fabmd.verification.settings.FibreSettings` for the fibre (here softened).
+
+    Args:
+        radius_m: capstan radius [m].
+        load_strain: end load over E·A.
+        tool_stiffness_factor: the capstan's contact stiffness factor.
+    """
+
+    modulus_pa: float = field(default=MODULUS_PA, metadata=unit("pressure"))
+    speed_fraction: float = 0.03
+    radius_m: float = field(default=0.3e-3, metadata=unit("length"))
+    load_strain: float = 1e-3
+    tool_stiffness_factor: float = 0.1
 
 
-def from_settings(settings: dict[str, float], friction: float, wrap_angle_rad: float) -> Capstan:
-    """A :class:`Capstan` case with some defaults replaced (SI values)."""
-    from ..model.beads import Discretisation, TimeStep
+def from_settings(settings: dict, friction: float, wrap_angle_rad: float) -> Capstan:
+    """A :class:`Capstan` case with some defaults replaced (``--set`` values)."""
+    from ..model.beads import Discretisation
     from ..model.contact import ToolContact
 
-    check_known(settings, SETTINGS, "capstan")
-    get = settings.get
-    fibre = fibre_from(settings, MODULUS_PA, "glass, softened")
-    return Capstan(fibre=fibre, wrap_angle_rad=wrap_angle_rad,
-                   tool=ToolContact(friction=friction,
-                                    stiffness_factor=get("tool_stiffness_factor", 0.1)),
-                   radius_m=get("radius_m", 0.3e-3), load_strain=get("load_strain", 1e-3),
-                   speed_fraction=get("speed_fraction", 0.03),
-                   discretisation=Discretisation(spacing_ratio=get("spacing_ratio", 0.5)),
-                   time_step=TimeStep(factor=get("time_step_factor", 0.25)))
+    s = read(Settings, settings, "capstan")
+    return Capstan(fibre=s.fibre("glass, softened"), wrap_angle_rad=wrap_angle_rad,
+                   tool=ToolContact(friction=friction, stiffness_factor=s.tool_stiffness_factor),
+                   radius_m=s.radius_m, load_strain=s.load_strain,
+                   speed_fraction=s.speed_fraction,
+                   discretisation=Discretisation(spacing_ratio=s.spacing_ratio),
+                   time_step=s.time_step)
 
 
 def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool = False,

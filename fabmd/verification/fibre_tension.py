@@ -2,36 +2,47 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..engine import Engine
 from ..protocols.fibre_tension import FibreTension
-from .settings import check_known, fibre_from
+from ..schema import unit
+from .settings import FibreSettings, read
 
 TOLERANCE = 0.01
 
-#: settings ``--set KEY=VALUE`` may change, and where they go
-SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "length_m", "spacing_ratio",
-            "mass_scaling", "time_step_factor", "time_step_s", "max_strain", "speed_fraction",
-            "trajectory_frames")
+
+@dataclass(frozen=True)
+class Settings(FibreSettings):
+    """What ``--set KEY=VALUE`` may change (SI; units as text accepted); see
+    :class:`~fabmd.verification.settings.FibreSettings` for the fibre.
+
+    Args:
+        length_m: fibre length [m].
+        mass_scaling: bead mass scaling.
+        max_strain: strain at the end of the pull.
+        trajectory_frames: frames of the trajectory written.
+    """
+
+    length_m: float = field(default=0.01, metadata=unit("length"))
+    mass_scaling: float = 1.0
+    max_strain: float = 0.015
+    trajectory_frames: int = 20
 
 
-def from_settings(settings: dict[str, float]) -> FibreTension:
-    """A :class:`FibreTension` with some defaults replaced (SI values)."""
-    from ..model.beads import Discretisation, TimeStep
+def from_settings(settings: dict) -> FibreTension:
+    """A :class:`FibreTension` with some defaults replaced (``--set`` values)."""
+    from ..model.beads import Discretisation
     from ..model.material import GLASS
     from ..scene.outputs import TrajectoryOutput
 
-    check_known(settings, SETTINGS, "fibre-tension")
-    get = settings.get
-    fibre = fibre_from(settings, GLASS.modulus_pa, GLASS.name)
-    disc = Discretisation(spacing_ratio=get("spacing_ratio", 0.5),
-                          mass_scaling=get("mass_scaling", 1.0))
-    step = TimeStep(factor=get("time_step_factor", 0.25), value_s=get("time_step_s"))
-    return FibreTension(fibre=fibre, length_m=get("length_m", 0.01), discretisation=disc,
-                        time_step=step, max_strain=get("max_strain", 0.015),
-                        speed_fraction=get("speed_fraction", 1e-4),
-                        trajectory=TrajectoryOutput(frames=get("trajectory_frames", 20)))
+    s = read(Settings, settings, "fibre-tension")
+    disc = Discretisation(spacing_ratio=s.spacing_ratio, mass_scaling=s.mass_scaling)
+    return FibreTension(fibre=s.fibre(GLASS.name), length_m=s.length_m, discretisation=disc,
+                        time_step=s.time_step, max_strain=s.max_strain,
+                        speed_fraction=s.speed_fraction,
+                        trajectory=TrajectoryOutput(frames=s.trajectory_frames))
 
 
 def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool = False,

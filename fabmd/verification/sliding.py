@@ -9,37 +9,52 @@ F_t/F_n along the slide) is reported: it comes from the bead-chain bumps.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..engine import Engine, mpi
 from ..protocols.sliding import Sliding
 from ..results.folder import prepare_run_folder
-from .settings import check_known, fibre_from
+from ..schema import unit
+from .settings import FibreSettings, read
 
 TOLERANCE = 0.05
 #: (μ, normal model) of each case
 CASES = ((0.1, "hooke"), (0.3, "hooke"), (0.3, "hertz"))
 MODULUS_PA = 1e9
 
-SETTINGS = ("modulus_pa", "density_kg_m3", "diameter_m", "spacing_ratio", "load_strain",
-            "speed_fraction", "stiffness_factor", "periods", "time_step_factor")
+
+@dataclass(frozen=True)
+class Settings(FibreSettings):
+    """What ``--set KEY=VALUE`` may change (SI; units as text accepted); see
+    :class:`~fabmd.verification.settings.FibreSettings` for the fibres (here softened).
+
+    Args:
+        load_strain: normal load over E·A.
+        stiffness_factor: the contact's stiffness factor.
+        periods: bead periods slid.
+    """
+
+    modulus_pa: float = field(default=MODULUS_PA, metadata=unit("pressure"))
+    speed_fraction: float = 0.02
+    load_strain: float = 1e-3
+    stiffness_factor: float = 0.1
+    periods: float = 4
 
 
-def from_settings(settings: dict[str, float], friction: float, normal: str) -> Sliding:
-    """A :class:`Sliding` case with some defaults replaced (SI values)."""
-    from ..model.beads import Discretisation, TimeStep
+def from_settings(settings: dict, friction: float, normal: str) -> Sliding:
+    """A :class:`Sliding` case with some defaults replaced (``--set`` values)."""
+    from ..model.beads import Discretisation
     from ..model.contact import ContactModel
 
-    check_known(settings, SETTINGS, "sliding")
-    get = settings.get
-    fibre = fibre_from(settings, MODULUS_PA, "glass, softened")
-    disc = Discretisation() if "spacing_ratio" not in settings else \
-        Discretisation(spacing_ratio=settings["spacing_ratio"])
+    s = read(Settings, settings, "sliding")
     contact = ContactModel(friction=friction, normal=normal,
-                           stiffness_factor=get("stiffness_factor", 0.1))
-    return Sliding(fibre=fibre, contact=contact, load_strain=get("load_strain", 1e-3),
-                   periods=get("periods", 4), speed_fraction=get("speed_fraction", 0.02),
-                   discretisation=disc, time_step=TimeStep(factor=get("time_step_factor", 0.25)))
+                           stiffness_factor=s.stiffness_factor)
+    return Sliding(fibre=s.fibre("glass, softened"), contact=contact,
+                   load_strain=s.load_strain, periods=s.periods,
+                   speed_fraction=s.speed_fraction,
+                   discretisation=Discretisation(spacing_ratio=s.spacing_ratio),
+                   time_step=s.time_step)
 
 
 def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool = False,
