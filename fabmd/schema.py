@@ -102,8 +102,9 @@ UNITS: dict[str, dict[str, str | Unit]] = {
               "shear_cell_m": "length", "report_depths_m": "length"},
     "Compaction": {"max_pressure_pa": "pressure", "datasheet_pressure_pa": "pressure"},
 }
-#: fields whose name carries a unit no kind of :mod:`fabmd.units` converts: numbers only
-NUMBERS = {"Drape": ("holder_gain_m_s_n",)}
+#: fields whose name carries a unit that text cannot give: numbers only (a gain in m/s/N;
+#: a dict of widths [m] by family that the build sets, no scene key)
+NUMBERS = {"Drape": ("holder_gain_m_s_n",), "Fabric": ("woven_width_m",)}
 
 
 def unit_of(cls: type, name: str) -> Unit | None:
