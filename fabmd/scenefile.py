@@ -14,9 +14,12 @@ Sections fabmd owns (unknown keys in them are refused, naming the key)::
 
 Every other top-level table (``[crimp]``, ``[tension]``, ``[picture_frame]``,
 ``[drape]``, ...) is kept as a raw dict in :attr:`Scene.protocols` for the
-stage that reads it. Quantities may carry units as text: ``"1200 tex"``,
-``"2 mm"``, ``"73 GPa"``, ``"4 ends/cm"``; bare numbers are SI (tex for linear
-density). ``[fabric] architecture`` is one of:
+stage that reads it; :func:`fabmd.preflight.check_scene` builds them all before any
+stage runs (``fabmd build`` too). Every table, owned or not, is built by the one
+schema builder :func:`fabmd.schema.build` (field types from the classes' annotations,
+units declared per field, never guessed from a name). Quantities may carry units as
+text: ``"1200 tex"``, ``"2 mm"``, ``"73 GPa"``, ``"4 ends/cm"``, ``"5 N/m"``; bare
+numbers are SI (tex for linear density). ``[fabric] architecture`` is one of:
 
 =====================  ===========================================================
 ``plain``              —
