@@ -27,6 +27,7 @@ from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
 from ..model.contact import ToolContact
 from ..model.material import GLASS, VirtualFibre
+from ..model.timestep import stable_time_step_s
 from ..results.folder import read_print_file
 from ..results.plots import plot_curves
 from ..scene import blocks
@@ -101,9 +102,7 @@ class Capstan:
 
     @property
     def time_step_s(self) -> float:
-        b = self.beads
-        kn = self.tool.normal_stiffness_n_per_m([b])
-        return self.time_step.resolve(b.critical_time_step_s(kn))
+        return stable_time_step_s(self.beads, [self.tool], self.time_step)
 
     @property
     def tension_in_n(self) -> float:

@@ -39,6 +39,7 @@ from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel, ToolContact
+from ..model.timestep import stable_time_step_s
 from ..results.folder import read_ave_time
 from ..scene import blocks
 from ..scene.templates import render
@@ -145,15 +146,11 @@ class Compaction:
         return float(size[0] * size[1])
 
     def speed_m_s(self, model: BeadModel) -> float:
-        c = min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
-                for b in model_bead_parameters(model))
+        c = min(b.wave_speed_m_s for b in model_bead_parameters(model))
         return self.speed_fraction * c
 
     def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = max(self.contact.stability_stiffness_n_per_m(beads),
-                 self.tool.normal_stiffness_n_per_m(beads))
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        return stable_time_step_s(model, [self.contact, self.tool], self.time_step)
 
     def max_steps(self, model: BeadModel) -> int:
         lo, hi = self.platens(model)

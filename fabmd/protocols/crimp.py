@@ -35,6 +35,7 @@ from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
+from ..model.timestep import stable_time_step_s
 from ..results.cuts import cut_pngs
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import areal_density_kg_m2, fabric_measures, passed_through
@@ -141,9 +142,7 @@ class Crimp:
                 for i, bt in enumerate(model.bond_type_table, start=1)}
 
     def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = self.contact.stability_stiffness_n_per_m(beads)
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        return stable_time_step_s(model, [self.contact], self.time_step)
 
     def ramp_steps(self, model: BeadModel) -> int:
         beads = model_bead_parameters(model)
@@ -157,16 +156,15 @@ class Crimp:
         return self.ramp_steps(model) + self.quasi_static.max_steps // 4
 
     def reference_force_n(self, model: BeadModel) -> float:
-        forces = [abs(self.expansion.get(bt.family, 0.0)) * 2 * bt.coefficient
-                  * bt.rest_length_m for bt in model.bond_type_table]
-        floor = 1e-3 * max(2 * bt.coefficient * bt.rest_length_m
-                           for bt in model.bond_type_table)
+        forces = [abs(self.expansion.get(bt.family, 0.0)) * bt.bond_axial_stiffness_n
+                  for bt in model.bond_type_table]
+        floor = 1e-3 * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         return max(max(forces), floor)
 
     def reference_energy_j(self, model: BeadModel) -> float:
         """Strain energy of every bond at the reference force, F²/(2k) each [J]."""
         f = self.reference_force_n(model)
-        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        k = max(bt.spring_n_per_m for bt in model.bond_type_table)
         return model.n_bonds * f * f / (2 * k)
 
     def held_beads(self, model: BeadModel) -> np.ndarray:

@@ -40,6 +40,7 @@ from ..engine import Engine, mpi
 from ..errors import QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import model_bead_parameters
+from ..model.timestep import stable_time_step_s
 from ..results.curves import curve_difference
 from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
@@ -119,8 +120,7 @@ class DrivenTest:
     # -- loading and time ------------------------------------------------------------
     def wave_speed_m_s(self, model: BeadModel) -> float:
         """Slowest axial wave speed of the fibres, c = l0·sqrt(k/m) [m/s]."""
-        return min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
-                   for b in model_bead_parameters(model))
+        return min(b.wave_speed_m_s for b in model_bead_parameters(model))
 
     def nominal_loading(self, model: BeadModel) -> SmoothStartSpeed:
         """Boundary speed ``speed_fraction``·c, reached smoothly over ``ramp_fraction``."""
@@ -140,9 +140,7 @@ class DrivenTest:
         return self.nominal_loading(model).time_for(self.travel_m(model))
 
     def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = self.contact.stability_stiffness_n_per_m(beads)
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        return stable_time_step_s(model, [self.contact], self.time_step)
 
     def every(self, model: BeadModel) -> int:
         raw = math.ceil(self.duration_s(model) / self.time_step_s(model))
@@ -206,7 +204,7 @@ class DrivenTest:
     def relax_block(self, model: BeadModel, held: str, free: str,
                     reference_force_n: float) -> str:
         """Free relaxation with ``held`` fixed until quasi-static (``self.relax``)."""
-        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
+        k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
         n = int(model.fibre_bond_mask().sum())
         return blocks.relax(model, self.time_step_s(model), held, free, self.relax,
                             reference_force_n, n * reference_force_n**2 / (2 * k))

@@ -19,6 +19,7 @@ from ..errors import SimulationFailed
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
 from ..model.material import GLASS, VirtualFibre
+from ..model.timestep import stable_time_step_s
 from ..results.folder import read_print_file
 from ..results.plots import plot_curves
 from ..results.trajectory import finalise, salvage
@@ -91,7 +92,7 @@ class FibreTension:
 
     @property
     def time_step_s(self) -> float:
-        return self.time_step.resolve(self.beads.critical_time_step_s())
+        return stable_time_step_s(self.beads, (), self.time_step)
 
     @property
     def loading(self) -> SmoothStartSpeed:

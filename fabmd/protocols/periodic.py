@@ -87,7 +87,7 @@ class _PeriodicCellTest(DrivenTest):
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
         dt = self.time_step_s(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         outputs = self.outputs_block(
             model, "# power of the box deformation: v_p_box (above)", "v_p_box",
             mean_values="v_nxx v_nyy v_nxy",
@@ -186,7 +186,7 @@ class PeriodicTension(_PeriodicCellTest):
         if self.transverse == "held":
             return "# transverse size held (ly fixed)"
         lx, ly, lz = self.cell(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         n_fibres = max(model.n_fibres, 1)
         # Berendsen's modulus: a tenth of all fibres' E·A over the cell section (a
         # crimped fabric is far softer across than its fibres; a low guess relaxes faster

@@ -311,7 +311,7 @@ class PictureFrame(DrivenTest):
         g = self.frame(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
+        ea = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
         ax, ay = fmt(g.pin_a[0]), fmt(g.pin_a[1])

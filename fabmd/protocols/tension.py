@@ -120,7 +120,7 @@ class Tension(DrivenTest):
         left, right, _ = self.clamps(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
+        ref_force = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force *= 1e-3 * self.max_elongation_pct
         power, power_ref = clamp_power("clamps")
         # the clamps' inner edges at x_left - u and x_right + u move at -v and +v: the
