@@ -61,3 +61,34 @@ def test_bond_type_carries_its_stiffness():
     assert BEADS.mass_per_length_kg_m == pytest.approx(
         VirtualFibre.solid(GLASS, 0.1e-3).mass_per_length_kg_m)
     assert math.isfinite(dataclasses.replace(bt, rest_length_m=1.0).bond_axial_stiffness_n)
+
+
+def test_a_driven_plan_is_derived_once_and_kept(tmp_path, monkeypatch):
+    """Tension.input_text asked for the time step 13 times and derived the bead parameters
+    28 times; now the plan is derived once per model and read back from plan.json."""
+    from fabmd.protocols import driven
+    from fabmd.protocols.tension import Tension
+    from fabmd.scene.plan import read_plan
+
+    from .fabrics import parallel_fibres
+
+    calls = []
+    derive = driven.DrivenTest.derive_plan
+    monkeypatch.setattr(driven.DrivenTest, "derive_plan",
+                        lambda self, model: calls.append(1) or derive(self, model))
+    test, model = Tension(clamp_length_m=0.002), parallel_fibres()
+    text = test.input_text(model)
+    assert len(calls) == 1
+    plan = test.plan(model)
+    assert f"timestep        {plan.time_step_s:.10g}" in text
+    assert plan.steps % plan.every == 0 and plan.steps * plan.time_step_s == pytest.approx(
+        plan.duration_s, rel=1e-6 + plan.every / plan.steps)
+    assert plan.loading.time_for(test.travel_m(model)) == pytest.approx(
+        plan.steps * plan.time_step_s)
+    plan.write(tmp_path)
+    assert read_plan(tmp_path) == plan and test.read_plan(tmp_path, model) == plan
+    assert read_plan(tmp_path / "nowhere") is None
+    # another model, another plan; a replaced test derives its own
+    assert test.plan(parallel_fibres(n=2)) is not plan
+    slower = dataclasses.replace(test, speed_fraction=test.speed_fraction / 2)
+    assert slower.plan(model).steps > plan.steps and slower == slower
