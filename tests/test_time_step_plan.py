@@ -92,3 +92,40 @@ def test_a_driven_plan_is_derived_once_and_kept(tmp_path, monkeypatch):
     assert test.plan(parallel_fibres(n=2)) is not plan
     slower = dataclasses.replace(test, speed_fraction=test.speed_fraction / 2)
     assert slower.plan(model).steps > plan.steps and slower == slower
+
+
+def test_crimp_plan_is_derived_once(monkeypatch):
+    from fabmd.protocols.crimp import Crimp
+
+    from .fabrics import plain_weave_cell
+
+    calls = []
+    derive = Crimp.derive_plan
+    monkeypatch.setattr(Crimp, "derive_plan",
+                        lambda self, model: calls.append(1) or derive(self, model))
+    crimp, cell = Crimp(), plain_weave_cell()
+    crimp.input_text(cell)
+    plan = crimp.plan(cell)
+    assert len(calls) == 1
+    assert plan.steps == plan.extra["ramp_steps"] + crimp.quasi_static.max_steps // 4
+    assert plan.every == max(1, plan.steps // crimp.samples)
+
+
+@pytest.mark.lammps
+def test_a_driven_run_keeps_its_plan(tmp_path):
+    """The run folder holds plan.json, and the summary reports what it says."""
+    from fabmd.engine import Engine
+    from fabmd.protocols.tension import Tension
+    from fabmd.scene.outputs import TrajectoryOutput
+    from fabmd.scene.plan import read_plan
+
+    from .fabrics import parallel_fibres
+
+    model = parallel_fibres(n=1, length_m=4e-3)
+    test = Tension(max_elongation_pct=0.5, samples=10, trajectory=TrajectoryOutput(frames=0))
+    result = test.run(model, tmp_path / "t", engine=Engine(progress=False))
+    plan = read_plan(result.run_dir)
+    assert plan == test.plan(model)
+    assert result.summary["time_step_s"] == plan.time_step_s
+    assert result.summary["steps"] == plan.steps
+    assert result.summary["clamp_speed_m_s"] == plan.speed_m_s
