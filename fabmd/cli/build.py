@@ -76,14 +76,14 @@ def summarise(model, scene) -> dict:
     import numpy as np
 
     from ..model.fabric_model import bead_parameter_list
+    from ..model.timestep import critical_time_step_s
 
     info = model.info
     fams = model.family_names
     yarn_fam = np.array([y.family for y in model.yarns])
     fibre_fam = yarn_fam[model.fibre_yarn - 1]
     beads = bead_parameter_list(model, scene.fabric, scene.discretisation)
-    kn = scene.contact.normal_stiffness_n_per_m(beads)
-    dt = min(b.critical_time_step_s(kn) for b in beads)
+    dt = critical_time_step_s(beads, [scene.contact])  # stability stiffness: Hertz's tangent
     return {
         "architecture": info["architecture"]["name"],
         "periodic": bool(model.periodic[0]),

@@ -51,6 +51,17 @@ class BondType:
     #: yarns of override k; "" where unknown (models saved before overrides)
     spec: str = ""
 
+    @property
+    def spring_n_per_m(self) -> float:
+        """Axial spring of one bond, k = 2·K [N/m] (``bond harmonic`` is E = K(r − r0)²)."""
+        return 2 * self.coefficient
+
+    @property
+    def bond_axial_stiffness_n(self) -> float:
+        """E·A the bond carries, k·r0 = 2·K·r0 [N] (recovered from the coefficient: also
+        for cohesion links and models saved without ``axial_stiffness_n``)."""
+        return 2 * self.coefficient * self.rest_length_m
+
 
 @dataclass(frozen=True)
 class AngleType:

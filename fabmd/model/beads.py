@@ -85,6 +85,16 @@ class BeadParameters:
         return self.axial_stiffness_n / self.bond_length_m
 
     @property
+    def mass_per_length_kg_m(self) -> float:
+        """Mass per length of the chain, m/l0 [kg/m] (with the mass scaling)."""
+        return self.mass_kg / self.bond_length_m
+
+    @property
+    def wave_speed_m_s(self) -> float:
+        """Axial wave speed along the chain, c = l0·sqrt(k/m) [m/s]."""
+        return self.bond_length_m * math.sqrt(self.spring_n_per_m / self.mass_kg)
+
+    @property
     def bond_coefficient(self) -> float:
         """LAMMPS ``bond harmonic`` K = E·A/(2·l0) [J/m²]."""
         return 0.5 * self.spring_n_per_m
@@ -180,7 +190,7 @@ def model_bead_parameters(model) -> list[BeadParameters]:
     spring = np.zeros(model.n_beads)
     cohesion = ~model.fibre_bond_mask()
     if cohesion.any():
-        k = np.array([2.0 * bt.coefficient for bt in model.bond_type_table])
+        k = np.array([bt.spring_n_per_m for bt in model.bond_type_table])
         k_links = k[model.bond_types[cohesion] - 1]
         for end in (0, 1):
             spring += np.bincount(model.bonds[cohesion, end], weights=k_links,
@@ -202,14 +212,15 @@ def model_bead_parameters(model) -> list[BeadParameters]:
             diameter_m=float(model.diameters[mask].min()),
             bond_length_m=bt.rest_length_m,
             mass_kg=float(model.masses[mask].min()),
-            axial_stiffness_n=2.0 * bt.coefficient * bt.rest_length_m,
+            axial_stiffness_n=bt.bond_axial_stiffness_n,
             bending_stiffness_nm2=max(bending, default=0.0),
             cohesion_spring_n_per_m=float(spring[mask].max())))
     return out
 
 
 def model_critical_time_step_s(model, contact_stiffness_n_per_m: float = 0.0) -> float:
-    """Smallest critical time step over the bond types of a model [s]."""
+    """Smallest critical time step over the bond types of a model [s], for one contact
+    stiffness; with contact objects use :func:`fabmd.model.timestep.critical_time_step_s`."""
     beads = model_bead_parameters(model)
     if not beads:
         raise InputError("model has no bond types: cannot derive a time step")

@@ -64,7 +64,7 @@ def add_bending(model: BeadModel, factor: float) -> BeadModel:
     for fam in names:
         types = [bt for bt in model.fibre_bond_types() if bt.family == fam]
         bt = max(types, key=lambda t: t.coefficient * t.rest_length_m)
-        ea = 2.0 * bt.coefficient * bt.rest_length_m
+        ea = bt.bond_axial_stiffness_n
         d = float(model.diameters[model.atom_types == model.family_names.index(fam) + 1].max())
         table.append(AngleType(factor * ea * d * d / 16.0 / bt.rest_length_m, fam))
     index = {fam: i + 1 for i, fam in enumerate(names)}

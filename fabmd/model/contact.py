@@ -286,6 +286,11 @@ class ToolContact:
         return _normal_stiffness("tool_contact", self.normal_stiffness_pa,
                                  self.stiffness_factor, self.stiffness_n_per_m, beads)
 
+    def stability_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
+        """Highest normal stiffness expected [N/m], for the stable time step: the linear
+        wall's k_n (see :mod:`fabmd.model.timestep`)."""
+        return self.normal_stiffness_n_per_m(beads)
+
     def wall_coefficients(self, beads: list[BeadParameters]) -> dict[str, float]:
         """k_n [N/m], k_t [N/m], damping rates γ_n, γ_t [1/s] (force = m·γ·v) and μ.
 

@@ -199,7 +199,8 @@ class BiasExtension(DrivenTest):
 def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
            monitor: ContactPower | None = None) -> DrivenResult:
     """Force against displacement, central shear angle (closed form and fibres), evidence."""
-    out = read_outputs(run_dir, test.every(model), test.time_step_s(model), monitor)
+    plan = test.read_plan(run_dir, model)  # what the run was written with
+    out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
     h, w = test.free_length_m(model), test.width_m(model)
     d = 2 * out["clamp_displacement_m"]
     force = 0.5 * (out["force_left_n"] - out["force_right_n"])
@@ -208,7 +209,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
              "force_per_width_n_m": force / w, "shear_angle_deg": gamma,
              **energy_columns(out)}
     dmax = test.max_displacement(model)
-    started = started_mask(out, test.loading(model), d / dmax)
+    started = started_mask(out, plan.loading, d / dmax)
     fit = bilinear_fit(d, force)
     p = model.positions
     centre = (p[:, :2].min(axis=0) + p[:, :2].max(axis=0)) / 2
@@ -222,9 +223,9 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
         "free_length_m": h,
         "width_m": w,
         "l0_m": h - w,
-        "time_step_s": test.time_step_s(model),
-        "steps": test.steps(model),
-        "clamp_speed_m_s": test.loading(model).speed_m_s,
+        "time_step_s": plan.time_step_s,
+        "steps": plan.steps,
+        "clamp_speed_m_s": plan.loading.speed_m_s,
         "max_displacement_m": dmax,
         "max_shear_angle_deg": float(gamma.max()),
         "initial_stiffness_n_m": fit["initial_slope"],  # force per displacement

@@ -18,33 +18,30 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
 from .. import inputs
-from ..engine import Engine, mpi
+from ..engine import mpi
 from ..model.bead_model import BeadModel, BondType, Yarn
-from ..model.beads import Discretisation, TimeStep, bead_parameters
+from ..model.beads import Discretisation, TimeStep
 from ..model.contact import ToolContact
-from ..model.material import GLASS, VirtualFibre
+from ..model.material import VirtualFibre
 from ..results.folder import read_print_file
 from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
-from .common import DATA_FILE, RunResult, overlap_summary, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, RunResult, overlap_summary
+from .single_fibre import SingleFibreCheck, default_fibre, load_ramp
 
 PROTOCOL = "capstan"
 TOOL_FIX = "capstan"
 
 
-def default_fibre() -> VirtualFibre:
-    """A 0.1 mm E-glass virtual fibre."""
-    return VirtualFibre.solid(GLASS, 0.1e-3)
-
-
 @dataclass(frozen=True)
-class Capstan:
+class Capstan(SingleFibreCheck):
     """A virtual fibre wrapped over a fixed cylinder and pulled against a load.
 
     Args:
@@ -76,6 +73,8 @@ class Capstan:
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 400
 
+    protocol: ClassVar[str] = PROTOCOL
+
     def __post_init__(self):
         inputs.in_range("capstan.wrap_angle_rad", self.wrap_angle_rad, 0.0, 2 * math.pi,
                         low_open=True, high_open=True)
@@ -95,15 +94,8 @@ class Capstan:
         """μ between fibre and cylinder."""
         return self.tool.friction
 
-    @property
-    def beads(self):
-        return bead_parameters(self.fibre, self.discretisation)
-
-    @property
-    def time_step_s(self) -> float:
-        b = self.beads
-        kn = self.tool.normal_stiffness_n_per_m([b])
-        return self.time_step.resolve(b.critical_time_step_s(kn))
+    def plan_contacts(self) -> tuple:
+        return (self.tool,)
 
     @property
     def tension_in_n(self) -> float:
@@ -150,10 +142,6 @@ class Capstan:
     @property
     def duration_s(self) -> float:
         return self.ramp_time_s + self.loading.time_for(self.pull_m)
-
-    @property
-    def steps(self) -> int:
-        return int(np.ceil(self.duration_s / self.time_step_s))
 
     def _directions(self):
         """Arc start/end angles and unit tangents (path direction: load end → pulled end)."""
@@ -212,8 +200,7 @@ class Capstan:
         tin = self.load_direction(model) * self.tension_in_n
         tr = self.ramp_time_s
         beads = [self.beads]
-        ramp = f"((v_t<{tr:.10g})*(1-cos(PI*v_t/{tr:.10g}))/2+(v_t>={tr:.10g}))" if tr > 0 \
-            else "1.0"
+        ramp = load_ramp(tr)
         return "\n".join([
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),
             blocks.bonds(model),
@@ -231,20 +218,8 @@ class Capstan:
             render("finish", final_data="final.data"),
         ])
 
-    # -- run --------------------------------------------------------------------------
-    def run(self, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False) -> CapstanResult:
-        """Write the run folder, run LAMMPS, reduce the curve."""
-        engine = engine or Engine()
-        model = self.model()
-        run_dir = write_run_folder(out, PROTOCOL, model, self.input_text(model),
-                                   scene_dict(self), overwrite=overwrite)
-        run = run_folder(engine, run_dir, PROTOCOL)
-        result = reduce(run_dir, self, model)
-        result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
-        result.write()
-        result.summary = mpi.bcast_json(result.summary)
-        return result
+    def reduce(self, run_dir: Path, model: BeadModel) -> CapstanResult:
+        return reduce(run_dir, self, model)
 
 
 class CapstanResult(RunResult):

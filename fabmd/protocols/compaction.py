@@ -39,8 +39,10 @@ from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel, ToolContact
+from ..model.timestep import stable_time_step_s
 from ..results.folder import read_ave_time
 from ..scene import blocks
+from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.templates import render
 from ..units import quantity
 from .common import (
@@ -145,27 +147,37 @@ class Compaction:
         return float(size[0] * size[1])
 
     def speed_m_s(self, model: BeadModel) -> float:
-        c = min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
-                for b in model_bead_parameters(model))
+        c = min(b.wave_speed_m_s for b in model_bead_parameters(model))
         return self.speed_fraction * c
 
     def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = max(self.contact.stability_stiffness_n_per_m(beads),
-                 self.tool.normal_stiffness_n_per_m(beads))
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        return self.plan(model).time_step_s
 
     def max_steps(self, model: BeadModel) -> int:
-        lo, hi = self.platens(model)
-        travel = self.max_travel_fraction * (hi - lo)
-        return math.ceil(travel / self.speed_m_s(model) / self.time_step_s(model))
+        return self.plan(model).steps
 
     def settle_steps(self, model: BeadModel) -> int:
         """Steps the fabric settles between the platens at rest before the loading."""
-        return self.every(model) * max(1, round(self.settle_fraction * self.samples))
+        return self.plan(model).extra["settle_steps"]
 
     def every(self, model: BeadModel) -> int:
-        return max(1, self.max_steps(model) // self.samples)
+        return self.plan(model).every
+
+    def plan(self, model: BeadModel) -> RunPlan:
+        """Time step, steps (the top platen's longest travel), output interval, platen
+        speed and settling steps: derived once per model, kept in ``plan.json``."""
+        return cached_plan(self, model, self.derive_plan)
+
+    def derive_plan(self, model: BeadModel) -> RunPlan:
+        dt = stable_time_step_s(model, [self.contact, self.tool], self.time_step)
+        lo, hi = self.platens(model)
+        travel = self.max_travel_fraction * (hi - lo)
+        speed = self.speed_m_s(model)
+        steps = math.ceil(travel / speed / dt)
+        every = max(1, steps // self.samples)
+        settle = every * max(1, round(self.settle_fraction * self.samples))
+        return RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=travel / speed,
+                       speed_m_s=speed, extra={"settle_steps": settle})
 
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
@@ -208,6 +220,8 @@ class Compaction:
         else:
             run_dir = write_run_folder(out, self.protocol, model, text,
                                        {self.protocol: scene_dict(self)}, overwrite=overwrite)
+            if mpi.is_root():
+                self.plan(model).write(run_dir)
         run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
                          resume=resume)
         result = None
@@ -219,8 +233,8 @@ class Compaction:
 
     def reduce(self, run_dir: Path, model: BeadModel) -> DrivenResult:
         means = read_ave_time(run_dir / "means.dat")
-        dt = self.time_step_s(model)
-        settle = self.settle_steps(model)
+        plan = read_plan(run_dir) or self.plan(model)  # what the run was written with
+        dt, settle = plan.time_step_s, plan.extra["settle_steps"]
         keep = means["step"] > settle  # the settling intervals are not part of the curve
         p, h = means["pressure_pa"][keep], means["thickness_m"][keep]
         pb, ke = means["bottom_pressure_pa"][keep], means["kinetic_j"][keep]
@@ -232,7 +246,7 @@ class Compaction:
         area = self.area_m2(model)
         lo, hi = self.platens(model)
         turn_steps = int(float((run_dir / "turn.txt").read_text().split()[-1]))
-        reached = turn_steps < self.max_steps(model)
+        reached = turn_steps < plan.steps
         # work done on the fabric by the top platen, −∫F dz (trapezoid over the means)
         work = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * area
                                                 * -np.diff(h))])
@@ -260,7 +274,7 @@ class Compaction:
             "cell_m": [float(v) for v in (model.box_hi - model.box_lo)[:2]],
             "area_m2": area,
             "time_step_s": dt,
-            "platen_speed_m_s": self.speed_m_s(model),
+            "platen_speed_m_s": plan.speed_m_s,
             "starting_gap_m": hi - lo,
             "settled_pressure_pa": float(means["pressure_pa"][~keep][-1]) if (~keep).any()
             else 0.0,
@@ -283,25 +297,37 @@ class Compaction:
                                  "top pressure, on the loading branch above 10 % of the peak",
             **overlap_summary(run_dir, self.contact),
         }
-        problems = [f"{k} = {summary[k]:.2g} > {v:g}" for k, v in QUASI_STATIC_LIMITS.items()
-                    if summary[k] is not None and summary[k] > v]
-        summary["quasi_static"] = {"ok": not problems, "limits": dict(QUASI_STATIC_LIMITS),
-                                   "problems": problems}
-        if problems:
-            warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
-                          f" lower speed_fraction", QuasiStaticWarning, stacklevel=2)
+        problems = judge_quasi_static(summary, run_dir)
         if not reached:
             summary["pressure_note"] = (
                 f"the top platen travelled {self.max_travel_fraction:g} of the starting gap "
                 f"and reached {peak:.3g} Pa < {self.max_pressure_pa:.3g} Pa; raise "
                 f"max_travel_fraction or lower max_pressure_pa")
-        plot = {"path": "curve.png",
-                "series": [{"x": p[loading] / 1e3, "y": h[loading] * 1e3, "label": "loading"},
-                           {"x": p[~loading] / 1e3, "y": h[~loading] * 1e3, "style": "--",
-                            "label": "unloading"}],
-                "xlabel": "pressure [kPa]", "ylabel": "thickness [mm]",
-                "title": ("" if not problems else "NOT QUASI-STATIC, do not use: ")
-                + "Compaction between rigid platens",
-                "notes": f"cell {1e3 * summary['cell_m'][0]:.2f} x "
-                         f"{1e3 * summary['cell_m'][1]:.2f} mm\n{model.n_beads} beads"}
-        return DrivenResult(run_dir, curve, summary, [plot])
+        return DrivenResult(run_dir, curve, summary, [curve_plot(p, h, loading, summary,
+                                                                 bool(problems))])
+
+
+def judge_quasi_static(summary: dict, run_dir: Path) -> list[str]:
+    """Judge the summary's measures against :data:`QUASI_STATIC_LIMITS` (verdict into the
+    summary; a warning when one fails); returns the problems."""
+    problems = [f"{k} = {summary[k]:.2g} > {v:g}" for k, v in QUASI_STATIC_LIMITS.items()
+                if summary[k] is not None and summary[k] > v]
+    summary["quasi_static"] = {"ok": not problems, "limits": dict(QUASI_STATIC_LIMITS),
+                               "problems": problems}
+    if problems:
+        warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
+                      f" lower speed_fraction", QuasiStaticWarning, stacklevel=3)
+    return problems
+
+
+def curve_plot(p, h, loading, summary: dict, not_quasi_static: bool) -> dict:
+    """Plot spec of thickness [mm] against pressure [kPa], loading and unloading."""
+    return {"path": "curve.png",
+            "series": [{"x": p[loading] / 1e3, "y": h[loading] * 1e3, "label": "loading"},
+                       {"x": p[~loading] / 1e3, "y": h[~loading] * 1e3, "style": "--",
+                        "label": "unloading"}],
+            "xlabel": "pressure [kPa]", "ylabel": "thickness [mm]",
+            "title": ("NOT QUASI-STATIC, do not use: " if not_quasi_static else "")
+            + "Compaction between rigid platens",
+            "notes": f"cell {1e3 * summary['cell_m'][0]:.2f} x "
+                     f"{1e3 * summary['cell_m'][1]:.2f} mm\n{summary['n_beads']} beads"}

@@ -23,6 +23,7 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.bending import add_bending
 from ..model.cohesion import DEFAULT_REACH, add_cohesion
 from ..model.contact import ContactModel
+from ..model.timestep import stable_time_step_s
 from ..model.transform import cut, tile
 from ..results.folder import write_json
 from ..results.measure import fabric_measures
@@ -141,10 +142,9 @@ class Coupon:
 
     def input_text(self, model: BeadModel) -> str:
         beads = model_bead_parameters(model)
-        kn = self.contact.stability_stiffness_n_per_m(beads)
-        dt = self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
-        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
+        dt = stable_time_step_s(beads, [self.contact], self.time_step)
+        ea = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
+        k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
         ref = 1e-3 * ea
         return "\n".join([
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),

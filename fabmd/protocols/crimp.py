@@ -35,6 +35,7 @@ from ..errors import InputError, QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
+from ..model.timestep import stable_time_step_s
 from ..results.cuts import cut_pngs
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import areal_density_kg_m2, fabric_measures, passed_through
@@ -45,6 +46,7 @@ from ..results.trajectory import finalise, salvage
 from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
+from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import fmt, render
 from .common import (
@@ -141,32 +143,41 @@ class Crimp:
                 for i, bt in enumerate(model.bond_type_table, start=1)}
 
     def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = self.contact.stability_stiffness_n_per_m(beads)
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        return self.plan(model).time_step_s
 
     def ramp_steps(self, model: BeadModel) -> int:
-        beads = model_bead_parameters(model)
-        longest = int(np.bincount(model.fibre_ids).max())
-        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
-        return max(1000, int(self.ramp_transits * transit / self.time_step_s(model)))
+        return self.plan(model).extra["ramp_steps"]
 
     def expected_steps(self, model: BeadModel) -> int:
         """Steps the run is planned for: the ramp and a quarter of the relaxation budget
         (the relaxation stops once quasi-static); spaces history lines and frames."""
-        return self.ramp_steps(model) + self.quasi_static.max_steps // 4
+        return self.plan(model).steps
+
+    def plan(self, model: BeadModel) -> RunPlan:
+        """Time step, ramp steps, expected steps and output interval: derived once per
+        model, kept in ``plan.json``."""
+        return cached_plan(self, model, self.derive_plan)
+
+    def derive_plan(self, model: BeadModel) -> RunPlan:
+        dt = stable_time_step_s(model, [self.contact], self.time_step)
+        beads = model_bead_parameters(model)
+        longest = int(np.bincount(model.fibre_ids).max())
+        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
+        ramp = max(1000, int(self.ramp_transits * transit / dt))
+        steps = ramp + self.quasi_static.max_steps // 4
+        return RunPlan(time_step_s=dt, steps=steps, every=max(1, steps // self.samples),
+                       duration_s=steps * dt, extra={"ramp_steps": ramp})
 
     def reference_force_n(self, model: BeadModel) -> float:
-        forces = [abs(self.expansion.get(bt.family, 0.0)) * 2 * bt.coefficient
-                  * bt.rest_length_m for bt in model.bond_type_table]
-        floor = 1e-3 * max(2 * bt.coefficient * bt.rest_length_m
-                           for bt in model.bond_type_table)
+        forces = [abs(self.expansion.get(bt.family, 0.0)) * bt.bond_axial_stiffness_n
+                  for bt in model.bond_type_table]
+        floor = 1e-3 * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         return max(max(forces), floor)
 
     def reference_energy_j(self, model: BeadModel) -> float:
         """Strain energy of every bond at the reference force, F²/(2k) each [J]."""
         f = self.reference_force_n(model)
-        k = max(2 * bt.coefficient for bt in model.bond_type_table)
+        k = max(bt.spring_n_per_m for bt in model.bond_type_table)
         return model.n_bonds * f * f / (2 * k)
 
     def held_beads(self, model: BeadModel) -> np.ndarray:
@@ -179,7 +190,7 @@ class Crimp:
         dt = self.time_step_s(model)
         beads = model_bead_parameters(model)
         ramp = self.ramp_steps(model)
-        every = max(1, self.expected_steps(model) // self.samples)
+        every = self.plan(model).every
         held = self.held_beads(model)
         if len(held):
             ids = [str(i + 1) for i in held]
@@ -257,6 +268,8 @@ class Crimp:
             run_dir = write_run_folder(out, PROTOCOL, model, text,
                                        {"crimp": scene_dict(self), "model": model.metadata()},
                                        overwrite=overwrite)
+            if mpi.is_root():
+                self.plan(model).write(run_dir)
         paraview = self.trajectory.paraview
         try:
             run = run_folder(engine, run_dir, PROTOCOL, resume=resume)
@@ -346,7 +359,8 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
                "ke_to_strain_energy": raw["ke_ratio"], "force_residual_ratio": raw["force_ratio"],
                "thickness_m": raw["bead_centre_span_m"] + float(loose.diameters.max())}
     write_csv(run_dir / "history.csv", history)
-    ramp = crimp.ramp_steps(loose)
+    plan = read_plan(run_dir) or crimp.plan(loose)  # what the run was written with
+    ramp = plan.extra["ramp_steps"]
     preview_png(crimped, run_dir / "sections.png",
                 title="As-woven state after the crimp stage (cuts along warp and weft)")
     cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
@@ -361,7 +375,7 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     summary = {
         "protocol": PROTOCOL,
         "expansion": crimp.expansion,
-        "time_step_s": crimp.time_step_s(loose),
+        "time_step_s": plan.time_step_s,
         "ramp_steps": ramp,
         "steps": steps,
         "stopped_by": end.stopped_by,

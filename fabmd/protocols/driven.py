@@ -40,6 +40,7 @@ from ..engine import Engine, mpi
 from ..errors import QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.beads import model_bead_parameters
+from ..model.timestep import stable_time_step_s
 from ..results.curves import curve_difference
 from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
@@ -49,6 +50,7 @@ from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import check_trajectory
+from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import interval_columns, interval_verdict, relaxation_settled
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
@@ -119,8 +121,7 @@ class DrivenTest:
     # -- loading and time ------------------------------------------------------------
     def wave_speed_m_s(self, model: BeadModel) -> float:
         """Slowest axial wave speed of the fibres, c = l0·sqrt(k/m) [m/s]."""
-        return min(b.bond_length_m * math.sqrt(b.spring_n_per_m / b.mass_kg)
-                   for b in model_bead_parameters(model))
+        return min(b.wave_speed_m_s for b in model_bead_parameters(model))
 
     def nominal_loading(self, model: BeadModel) -> SmoothStartSpeed:
         """Boundary speed ``speed_fraction``·c, reached smoothly over ``ramp_fraction``."""
@@ -131,32 +132,68 @@ class DrivenTest:
     def loading(self, model: BeadModel) -> SmoothStartSpeed:
         """The nominal loading, a hair slower (less than one output interval over the test)
         so that the travel ends exactly on the last step, the last sample."""
-        k = self.duration_s(model) / (self.steps(model) * self.time_step_s(model))
-        nominal = self.nominal_loading(model)
-        return SmoothStartSpeed(nominal.speed_m_s * k, nominal.ramp_time_s / k)
+        return self.plan(model).loading
 
     def duration_s(self, model: BeadModel) -> float:
         """Nominal duration of the loading [s]."""
         return self.nominal_loading(model).time_for(self.travel_m(model))
 
     def time_step_s(self, model: BeadModel) -> float:
-        beads = model_bead_parameters(model)
-        kn = self.contact.stability_stiffness_n_per_m(beads)
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+        return self.plan(model).time_step_s
 
     def every(self, model: BeadModel) -> int:
-        raw = math.ceil(self.duration_s(model) / self.time_step_s(model))
-        return max(1, raw // self.samples)
+        return self.plan(model).every
 
     def steps(self, model: BeadModel) -> int:
         """Whole output intervals, so that the last sample is the end of the test."""
-        every = self.every(model)
-        return every * math.ceil(self.duration_s(model) / self.time_step_s(model) / every)
+        return self.plan(model).steps
 
     def gamma(self, model: BeadModel) -> float:
         """Viscous damping coefficient γ = m/τ [kg/s] (τ default: a tenth of the test)."""
-        tau = self.damping_time_s or self.duration_s(model) / 10
-        return float(np.median(model.masses)) / tau
+        return self.plan(model).gamma_kg_s
+
+    # -- the plan: derived once per model, kept in the run folder -------------------------
+    def plan_contacts(self) -> tuple:
+        """The contacts whose stiffness bounds the time step (a protocol with tools adds
+        them)."""
+        return (self.contact,)
+
+    def plan(self, model: BeadModel) -> RunPlan:
+        """Time step, steps, output interval, loading and damping of a run on ``model``:
+        derived once (:meth:`derive_plan`) and kept until asked for another model."""
+        return cached_plan(self, model, self.derive_plan)
+
+    def derive_plan(self, model: BeadModel) -> RunPlan:
+        """The one place the plan is derived (see :meth:`plan`)."""
+        cls = type(self)
+        duration = self.duration_s(model)
+        # a subclass that still overrides time_step_s/every/gamma (drape, until it
+        # moves to plan_contacts) keeps its own values
+        if cls.time_step_s is not DrivenTest.time_step_s:
+            dt = self.time_step_s(model)
+        else:
+            dt = stable_time_step_s(model, self.plan_contacts(), self.time_step)
+        if cls.every is not DrivenTest.every:
+            every = self.every(model)
+        else:
+            every = max(1, math.ceil(duration / dt) // self.samples)
+        steps = every * math.ceil(duration / dt / every)
+        k = duration / (steps * dt)
+        nominal = self.nominal_loading(model)
+        mass = float(np.median(model.masses))
+        tau = self.damping_time_s or duration / 10
+        gamma = mass / tau
+        if cls.gamma is not DrivenTest.gamma:
+            gamma = self.gamma(model)
+            tau = mass / gamma
+        return RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=duration,
+                       speed_m_s=nominal.speed_m_s * k, ramp_time_s=nominal.ramp_time_s / k,
+                       damping_time_s=tau, gamma_kg_s=gamma)
+
+    def read_plan(self, run_dir: Path, model: BeadModel) -> RunPlan:
+        """The plan ``run_dir`` was run with (``plan.json``); derived again for a folder
+        written before plans were kept."""
+        return read_plan(run_dir) or self.plan(model)
 
     def drag_block(self, model: BeadModel, field: AffineField) -> tuple[str, str]:
         """(LAMMPS text, per-bead damping power) of the drag on the free beads: relative to
@@ -206,7 +243,7 @@ class DrivenTest:
     def relax_block(self, model: BeadModel, held: str, free: str,
                     reference_force_n: float) -> str:
         """Free relaxation with ``held`` fixed until quasi-static (``self.relax``)."""
-        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
+        k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
         n = int(model.fibre_bond_mask().sum())
         return blocks.relax(model, self.time_step_s(model), held, free, self.relax,
                             reference_force_n, n * reference_force_n**2 / (2 * k))
@@ -249,6 +286,8 @@ class DrivenTest:
         else:
             run_dir = write_run_folder(out, self.protocol, start, text,
                                        {self.protocol: scene_dict(self)}, overwrite=overwrite)
+            if mpi.is_root():
+                self.plan(start).write(run_dir)
         monitor = monitor or self.make_monitor()
         paraview = self.trajectory.paraview
         try:

@@ -10,34 +10,29 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
 from .. import inputs
-from ..engine import Engine, mpi
-from ..errors import SimulationFailed
+from ..engine import mpi
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, TimeStep, bead_parameters
-from ..model.material import GLASS, VirtualFibre
+from ..model.material import VirtualFibre
 from ..results.folder import read_print_file
 from ..results.plots import plot_curves
-from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput
 from ..scene.templates import render
-from .common import DATA_FILE, RunResult, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, RunResult
+from .single_fibre import SingleFibreCheck, default_fibre
 
 PROTOCOL = "fibre_tension"
 
 
-def default_fibre() -> VirtualFibre:
-    """A 0.1 mm E-glass virtual fibre."""
-    return VirtualFibre.solid(GLASS, 0.1e-3)
-
-
 @dataclass(frozen=True)
-class FibreTension:
+class FibreTension(SingleFibreCheck):
     """A single virtual fibre pulled at constant speed.
 
     Args:
@@ -63,6 +58,8 @@ class FibreTension:
     ramp_transits: float = 10.0
     samples: int = 300
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
+
+    protocol: ClassVar[str] = PROTOCOL
 
     def __post_init__(self):
         inputs.positive("fibre_tension.length_m", self.length_m)
@@ -90,10 +87,6 @@ class FibreTension:
                                bond_length_m=self.length_m / self.n_bonds)
 
     @property
-    def time_step_s(self) -> float:
-        return self.time_step.resolve(self.beads.critical_time_step_s())
-
-    @property
     def loading(self) -> SmoothStartSpeed:
         c = self.fibre.material.wave_speed_m_s / np.sqrt(self.discretisation.mass_scaling)
         transit = self.length_m / c
@@ -102,10 +95,6 @@ class FibreTension:
     @property
     def duration_s(self) -> float:
         return self.loading.time_for(self.max_strain * self.length_m)
-
-    @property
-    def steps(self) -> int:
-        return int(np.ceil(self.duration_s / self.time_step_s))
 
     def model(self) -> BeadModel:
         """The straight chain along x."""
@@ -143,27 +132,8 @@ class FibreTension:
             render("finish", final_data="final.data"),
         ])
 
-    # -- run --------------------------------------------------------------------------
-    def run(self, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False) -> FibreTensionResult:
-        """Write the run folder, run LAMMPS, reduce the curve."""
-        engine = engine or Engine()
-        model = self.model()
-        run_dir = write_run_folder(out, PROTOCOL, model, self.input_text(model),
-                                   scene_dict(self), overwrite=overwrite)
-        try:
-            run = run_folder(engine, run_dir, PROTOCOL)
-        except SimulationFailed:
-            salvage(run_dir, paraview=self.trajectory.paraview, model=model)  # frames so far
-            raise
-        trajectory = finalise(run_dir, paraview=self.trajectory.paraview, model=model)
-        result = reduce(run_dir, self)
-        result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
-                              trajectory=trajectory.name if trajectory else None)
-        result.write()
-        # every rank returns rank 0's summary; the curve stays on rank 0
-        result.summary = mpi.bcast_json(result.summary)
-        return result
+    def reduce(self, run_dir: Path, model: BeadModel) -> FibreTensionResult:
+        return reduce(run_dir, self)
 
 
 class FibreTensionResult(RunResult):

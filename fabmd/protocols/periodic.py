@@ -39,6 +39,7 @@ from ..results.curves import bilinear_fit, tangent_intersection, values_at
 from ..results.figure import report_marks
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
+from ..scene.plan import RunPlan
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
 from .driven import (
@@ -87,7 +88,7 @@ class _PeriodicCellTest(DrivenTest):
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
         dt = self.time_step_s(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         outputs = self.outputs_block(
             model, "# power of the box deformation: v_p_box (above)", "v_p_box",
             mean_values="v_nxx v_nyy v_nxy",
@@ -107,16 +108,16 @@ class _PeriodicCellTest(DrivenTest):
         return (f'variable        s equal "{load.lammps_displacement()}"\n'
                 f'variable        s_rate equal "{load.lammps_velocity()}"')
 
-    def _common_summary(self, model: BeadModel, out, progress) -> dict:
-        started = started_mask(out, self.loading(model), progress)
+    def _common_summary(self, model: BeadModel, out, progress, plan: RunPlan) -> dict:
+        started = started_mask(out, plan.loading, progress)
         lx, ly, lz = self.cell(model)
         return {
             "protocol": self.protocol,
             "n_beads": model.n_beads,
             "cell_m": [lx, ly],
-            "time_step_s": self.time_step_s(model),
-            "steps": self.steps(model),
-            "boundary_speed_m_s": self.loading(model).speed_m_s,
+            "time_step_s": plan.time_step_s,
+            "steps": plan.steps,
+            "boundary_speed_m_s": plan.loading.speed_m_s,
             "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
             "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
             "quasi_static_note": "kinetic energy over the bond strain energy and over the "
@@ -186,7 +187,7 @@ class PeriodicTension(_PeriodicCellTest):
         if self.transverse == "held":
             return "# transverse size held (ly fixed)"
         lx, ly, lz = self.cell(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.bond_type_table)
+        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         n_fibres = max(model.n_fibres, 1)
         # Berendsen's modulus: a tenth of all fibres' E·A over the cell section (a
         # crimped fabric is far softer across than its fibres; a low guess relaxes faster
@@ -209,7 +210,8 @@ class PeriodicTension(_PeriodicCellTest):
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
-        out = read_outputs(run_dir, self.every(model), self.time_step_s(model), monitor)
+        plan = self.read_plan(run_dir, model)  # what the run was written with
+        out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
         lx0, ly0, _ = self.cell(model)
         strain = (out["box_lx_m"] - lx0) / lx0
         nxx = out["n_xx_n_m"]
@@ -219,7 +221,8 @@ class PeriodicTension(_PeriodicCellTest):
         fit = bilinear_fit(100 * strain, nxx)
         # tangents: 10-40 % of the strain range (past the smooth start) and the last 20 %
         tangents = tangent_intersection(strain, nxx, initial=(0.1, 0.4), final=0.2)
-        summary = self._common_summary(model, out, strain / (self.max_strain_pct / 100))
+        summary = self._common_summary(model, out, strain / (self.max_strain_pct / 100),
+                                       plan)
         summary.update({
             "transverse": self.transverse,
             "width_m": ly0,
@@ -306,7 +309,8 @@ class PeriodicShear(_PeriodicCellTest):
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
-        out = read_outputs(run_dir, self.every(model), self.time_step_s(model), monitor)
+        plan = self.read_plan(run_dir, model)  # what the run was written with
+        out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
         lx0, ly0, _ = self.cell(model)
         gamma = np.arctan2(out["box_xy_m"], out["box_ly_m"])
         # F_norm = power per initial area / (cos γ γ̇): work over A0·Δ(sin γ) per interval
@@ -317,7 +321,7 @@ class PeriodicShear(_PeriodicCellTest):
         valid = deg > 0.02 * deg.max()
         lock = tangent_intersection(deg[valid], fnorm[valid])
         initial = tangent_intersection(gamma[valid], fnorm[valid])["initial_slope"]
-        summary = self._common_summary(model, out, deg / self.max_shear_angle_deg)
+        summary = self._common_summary(model, out, deg / self.max_shear_angle_deg, plan)
         summary.update({
             "initial_shear_stiffness_n_m_per_rad": initial,
             "locking_angle_deg": lock["x"] if lock["found"] else None,

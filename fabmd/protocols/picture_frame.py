@@ -311,7 +311,7 @@ class PictureFrame(DrivenTest):
         g = self.frame(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        ea = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
+        ea = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
         ax, ay = fmt(g.pin_a[0]), fmt(g.pin_a[1])
@@ -353,7 +353,8 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
            monitor: ContactPower | None = None) -> DrivenResult:
     """Curve (shear angle, frame force, F_s, F_norm), locking angle and the evidence."""
     g = test.frame(model)
-    out = read_outputs(run_dir, test.every(model), test.time_step_s(model), monitor)
+    plan = test.read_plan(run_dir, model)  # what the run was written with
+    out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
     d = out["displacement_m"]
     gamma = shear_angle_from_displacement_deg(d, g.frame_length_m)
     force = interval_force(d, out.external_work_j)
@@ -364,7 +365,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
              "frame_force_n": force, "shear_force_n": fs, "normalised_force_n_m": fnorm,
              **energy_columns(out)}
     dmax = test.max_displacement(model)
-    started = started_mask(out, test.loading(model), d / dmax)
+    started = started_mask(out, plan.loading, d / dmax)
     # by a method that reads the curve only up to a little past locking (not the last part)
     lock = locking_angle(gamma, fnorm, initial_deg=test.locking_initial_deg,
                          factor=test.locking_factor)
@@ -383,9 +384,9 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
         "clamp_width_m": g.clamp_width_m,
         "free_side_m": g.free_side_m,
         "pretension_strain": test.pretension_strain,
-        "time_step_s": test.time_step_s(model),
-        "steps": test.steps(model),
-        "corner_speed_m_s": test.loading(model).speed_m_s,
+        "time_step_s": plan.time_step_s,
+        "steps": plan.steps,
+        "corner_speed_m_s": plan.loading.speed_m_s,
         "max_displacement_m": dmax,
         "max_shear_angle_deg": float(gamma.max()),
         "initial_shear_stiffness_n_m_per_rad": initial,

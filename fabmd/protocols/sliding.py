@@ -18,21 +18,23 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
 from .. import inputs
-from ..engine import Engine, mpi
+from ..engine import mpi
 from ..model.bead_model import BeadModel, BondType, Yarn
-from ..model.beads import Discretisation, TimeStep, bead_parameters
+from ..model.beads import Discretisation, TimeStep
 from ..model.contact import ContactModel
-from ..model.material import GLASS, VirtualFibre
+from ..model.material import VirtualFibre
 from ..results.folder import read_print_file
 from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.loading import SmoothStartSpeed
 from ..scene.templates import render
-from .common import DATA_FILE, RunResult, overlap_summary, run_folder, scene_dict, write_run_folder
+from .common import DATA_FILE, RunResult, overlap_summary
+from .single_fibre import SingleFibreCheck, default_fibre, load_ramp
 
 PROTOCOL = "sliding"
 #: beads of the slider (odd: one bead sits on the crossing)
@@ -41,13 +43,8 @@ SLIDER_BEADS = 7
 SAMPLES_PER_PERIOD = 40
 
 
-def default_fibre() -> VirtualFibre:
-    """A 0.1 mm E-glass virtual fibre."""
-    return VirtualFibre.solid(GLASS, 0.1e-3)
-
-
 @dataclass(frozen=True)
-class Sliding:
+class Sliding(SingleFibreCheck):
     """A fibre pulled across another under a normal load.
 
     Args:
@@ -71,6 +68,8 @@ class Sliding:
     discretisation: Discretisation = field(default_factory=Discretisation)
     time_step: TimeStep = field(default_factory=TimeStep)
 
+    protocol: ClassVar[str] = PROTOCOL
+
     def __post_init__(self):
         inputs.in_range("sliding.load_strain", self.load_strain, 0.0, 0.01, low_open=True)
         object.__setattr__(self, "periods", inputs.positive_int("sliding.periods",
@@ -81,15 +80,8 @@ class Sliding:
         _ = self.time_step_s  # validates an explicit time step against the stable one
 
     # -- derived ----------------------------------------------------------------------
-    @property
-    def beads(self):
-        return bead_parameters(self.fibre, self.discretisation)
-
-    @property
-    def time_step_s(self) -> float:
-        b = self.beads
-        kn = self.contact.stability_stiffness_n_per_m([b])
-        return self.time_step.resolve(b.critical_time_step_s(kn))
+    def plan_contacts(self) -> tuple:
+        return (self.contact,)
 
     @property
     def normal_load_n(self) -> float:
@@ -122,10 +114,6 @@ class Sliding:
     @property
     def duration_s(self) -> float:
         return self.ramp_time_s + self.loading.time_for(self.window_m[1])
-
-    @property
-    def steps(self) -> int:
-        return int(np.ceil(self.duration_s / self.time_step_s))
 
     @property
     def output_every(self) -> int:
@@ -165,8 +153,7 @@ class Sliding:
         load = self.loading
         tr = self.ramp_time_s
         beads = [self.beads]
-        ramp = f"((v_t<{tr:.10g})*(1-cos(PI*v_t/{tr:.10g}))/2+(v_t>={tr:.10g}))" if tr > 0 \
-            else "1.0"
+        ramp = load_ramp(tr)
         return "\n".join([
             blocks.setup(model, PROTOCOL, DATA_FILE, dt),
             blocks.bonds(model),
@@ -181,20 +168,8 @@ class Sliding:
             render("finish", final_data="final.data"),
         ])
 
-    # -- run --------------------------------------------------------------------------
-    def run(self, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False) -> SlidingResult:
-        """Write the run folder, run LAMMPS, reduce the curve."""
-        engine = engine or Engine()
-        model = self.model()
-        run_dir = write_run_folder(out, PROTOCOL, model, self.input_text(model),
-                                   scene_dict(self), overwrite=overwrite)
-        run = run_folder(engine, run_dir, PROTOCOL)
-        result = reduce(run_dir, self)
-        result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
-        result.write()
-        result.summary = mpi.bcast_json(result.summary)
-        return result
+    def reduce(self, run_dir: Path, model: BeadModel) -> SlidingResult:
+        return reduce(run_dir, self)
 
 
 class SlidingResult(RunResult):

@@ -120,7 +120,7 @@ class Tension(DrivenTest):
         left, right, _ = self.clamps(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
-        ref_force = max(2 * bt.coefficient * bt.rest_length_m for bt in model.fibre_bond_types())
+        ref_force = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force *= 1e-3 * self.max_elongation_pct
         power, power_ref = clamp_power("clamps")
         # the clamps' inner edges at x_left - u and x_right + u move at -v and +v: the
@@ -151,7 +151,8 @@ class TensionResult(DrivenResult):
 def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
            monitor: ContactPower | None = None) -> TensionResult:
     """Read the run back and build the curve, the summary and the energy balance."""
-    out = read_outputs(run_dir, test.every(coupon), test.time_step_s(coupon), monitor)
+    plan = test.read_plan(run_dir, coupon)  # what the run was written with
+    out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
     _, _, gauge = test.clamps(coupon)
     width = float(np.ptp(coupon.positions[:, 1]) + coupon.diameters.max())
     elongation = 2 * out["clamp_displacement_m"] / gauge
@@ -166,16 +167,16 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         **energy_columns(out),
     }
     # start-up: the smooth start, the first tenth of the elongation and the slack toe
-    started = started_mask(out, test.loading(coupon), elongation / (test.max_elongation_pct / 100))
+    started = started_mask(out, plan.loading, elongation / (test.max_elongation_pct / 100))
     fit = bilinear_fit(100 * elongation, force)
     summary = {
         "protocol": PROTOCOL,
         "n_beads": coupon.n_beads,
         "gauge_length_m": gauge,
         "width_m": width,
-        "time_step_s": test.time_step_s(coupon),
-        "steps": test.steps(coupon),
-        "clamp_speed_m_s": test.loading(coupon).speed_m_s,
+        "time_step_s": plan.time_step_s,
+        "steps": plan.steps,
+        "clamp_speed_m_s": plan.loading.speed_m_s,
         "initial_stiffness_n": fit["initial_slope"] * 100,  # N per unit strain
         "final_stiffness_n": fit["final_slope"] * 100,
         "initial_stiffness_n_m_per_width": fit["initial_slope"] * 100 / width,

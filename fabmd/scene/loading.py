@@ -59,6 +59,14 @@ class SmoothStartSpeed:
         return (f"(v_{t}<{tr})*{v0}*(v_{t}/2-{tr}/(2*PI)*sin(PI*v_{t}/{tr}))"
                 f"+(v_{t}>={tr})*{v0}*(v_{t}-{tr}/2)")
 
+    def lammps_ramp(self, t: str = "t") -> str:
+        """The smooth-start factor v(t)/v0, from 0 to 1 over the ramp: a load ramped up the
+        same way is its final value times this formula."""
+        if self.ramp_time_s == 0:
+            return "1.0"
+        tr = fmt(self.ramp_time_s)
+        return f"((v_{t}<{tr})*(1-cos(PI*v_{t}/{tr}))/2+(v_{t}>={tr}))"
+
     def lammps_velocity(self, t: str = "t") -> str:
         v0, tr = fmt(self.speed_m_s), fmt(self.ramp_time_s)
         if self.ramp_time_s == 0:

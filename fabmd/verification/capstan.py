@@ -11,10 +11,10 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..engine import Engine, mpi
+from ..engine import Engine
 from ..protocols.capstan import Capstan
-from ..results.folder import prepare_run_folder
 from ..schema import unit
+from .cases import run_cases
 from .settings import FibreSettings, read
 
 TOLERANCE = 0.05
@@ -22,6 +22,9 @@ FRICTIONS = (0.1, 0.3)
 WRAP_ANGLES = (math.pi / 2, math.pi)
 #: the softened modulus of the check [Pa] (the ratio is independent of E)
 MODULUS_PA = 1e9
+#: summary keys reported for each case
+CASE_KEYS = ("mu", "theta_rad", "expected_ratio", "measured_ratio", "rel_error", "ratio_std",
+             "max_overlap_ratio", "n_beads", "steps")
 
 
 @dataclass(frozen=True)
@@ -61,28 +64,7 @@ def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool
     """Run the four capstan cases; each ratio must be within 5 % of exp(μθ)."""
     settings = settings or {}
     tests = [from_settings(settings, mu, theta) for mu in FRICTIONS for theta in WRAP_ANGLES]
-    engine = engine or Engine()
-    root = prepare_run_folder(out, overwrite=overwrite, prefix="capstan")
-    cases, wall = [], 0.0
-    for test in tests:
-        name = f"mu{test.friction:g}-theta{math.degrees(test.wrap_angle_rad):.0f}"
-        s = test.run(out=root / name, engine=engine).summary
-        wall += s.get("wall_s", 0.0)
-        cases.append({"mu": test.friction, "theta_rad": test.wrap_angle_rad,
-                      "expected_ratio": s["expected_ratio"],
-                      "measured_ratio": s["measured_ratio"], "rel_error": s["rel_error"],
-                      "ratio_std": s["ratio_std"], "max_overlap_ratio": s["max_overlap_ratio"],
-                      "n_beads": s["n_beads"], "steps": s["steps"]})
-    worst = max(c["rel_error"] for c in cases)
-    result = {
-        "check": "capstan",
-        "closed_form": "T_out/T_in = exp(mu*theta)",
-        "modulus_pa": tests[0].fibre.material.modulus_pa,
-        "tolerance": TOLERANCE,
-        "max_rel_error": worst,
-        "passed": worst <= TOLERANCE,
-        "wall_s": wall,
-        "run_dir": str(root),
-        "cases": cases,
-    }
-    return mpi.bcast_json(result)
+    named = [(f"mu{t.friction:g}-theta{math.degrees(t.wrap_angle_rad):.0f}", t) for t in tests]
+    head = {"check": "capstan", "closed_form": "T_out/T_in = exp(mu*theta)",
+            "modulus_pa": tests[0].fibre.material.modulus_pa}
+    return run_cases("capstan", named, CASE_KEYS, head, TOLERANCE, out, engine, overwrite)

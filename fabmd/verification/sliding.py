@@ -12,16 +12,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..engine import Engine, mpi
+from ..engine import Engine
 from ..protocols.sliding import Sliding
-from ..results.folder import prepare_run_folder
 from ..schema import unit
+from .cases import run_cases
 from .settings import FibreSettings, read
 
 TOLERANCE = 0.05
 #: (μ, normal model) of each case
 CASES = ((0.1, "hooke"), (0.3, "hooke"), (0.3, "hertz"))
 MODULUS_PA = 1e9
+#: summary keys reported for each case
+CASE_KEYS = ("mu", "normal", "pair_style", "measured_ratio", "rel_error", "ratio_min",
+             "ratio_max", "ratio_std", "max_overlap_ratio", "steps")
 
 
 @dataclass(frozen=True)
@@ -62,29 +65,8 @@ def check(out: Path | None = None, engine: Engine | None = None, overwrite: bool
     """Run the sliding cases; each mean F_t/F_n must be within 5 % of μ."""
     settings = settings or {}
     tests = [from_settings(settings, mu, normal) for mu, normal in CASES]
-    engine = engine or Engine()
-    root = prepare_run_folder(out, overwrite=overwrite, prefix="sliding")
-    cases, wall = [], 0.0
-    for test in tests:
-        name = f"mu{test.contact.friction:g}-{test.contact.normal}"
-        s = test.run(out=root / name, engine=engine).summary
-        wall += s.get("wall_s", 0.0)
-        cases.append({"mu": s["mu"], "normal": s["normal"], "pair_style": s["pair_style"],
-                      "measured_ratio": s["measured_ratio"], "rel_error": s["rel_error"],
-                      "ratio_min": s["ratio_min"], "ratio_max": s["ratio_max"],
-                      "ratio_std": s["ratio_std"], "max_overlap_ratio": s["max_overlap_ratio"],
-                      "steps": s["steps"]})
-    worst = max(c["rel_error"] for c in cases)
-    result = {
-        "check": "sliding",
-        "closed_form": "mean F_t/F_n = mu",
-        "modulus_pa": tests[0].fibre.material.modulus_pa,
-        "spacing_ratio": tests[0].discretisation.spacing_ratio,
-        "tolerance": TOLERANCE,
-        "max_rel_error": worst,
-        "passed": worst <= TOLERANCE,
-        "wall_s": wall,
-        "run_dir": str(root),
-        "cases": cases,
-    }
-    return mpi.bcast_json(result)
+    named = [(f"mu{t.contact.friction:g}-{t.contact.normal}", t) for t in tests]
+    head = {"check": "sliding", "closed_form": "mean F_t/F_n = mu",
+            "modulus_pa": tests[0].fibre.material.modulus_pa,
+            "spacing_ratio": tests[0].discretisation.spacing_ratio}
+    return run_cases("sliding", named, CASE_KEYS, head, TOLERANCE, out, engine, overwrite)
