@@ -42,7 +42,8 @@ def plot_specs(depth: np.ndarray, punch: np.ndarray, holder: np.ndarray, set_for
 
 def write_final(run_dir: Path, model: BeadModel, final: BeadModel, fld: Field,
                 g: DrapeGeometry, test: Drape, travel: float) -> None:
-    """Shear-angle data and map, the final shape (VTU + PNG); rank 0."""
+    """Shear-angle data and map, the final shape (VTU + PNG); rank 0. ``travel``: the
+    punch's final travel [m]."""
     if not mpi.is_root():
         return
     import meshio
@@ -82,7 +83,8 @@ def write_final(run_dir: Path, model: BeadModel, final: BeadModel, fld: Field,
 
 def shape_png(path: Path, model: BeadModel, final: BeadModel, g: DrapeGeometry,
               travel: float) -> None:
-    """Top view of the draped blank coloured by height, and a section along the warp."""
+    """Top view of the draped blank coloured by height, and a section along the warp
+    (``travel``: the punch's final travel [m])."""
     from ...results.plots import _pyplot
 
     plt = _pyplot()
