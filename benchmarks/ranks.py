@@ -5,10 +5,11 @@
   whole process and LAMMPS's loop time. ``fabmd.engine.ranks.MIN_BEADS_PER_RANK`` is
   set from where 2 ranks start to win;
 * demo: ``fabmd demo [--fast] --out DIR`` with the default choice of ranks against
-  ``--np 1``, back to back, with the output numbers of both (they must agree within the
-  MPI tolerance of the test suite, rtol 1e-6 on forces).
+  ``--np 1``, back to back, with the output numbers of both: single fibres agree to
+  1e-6 on any number of ranks (the suite's MPI tolerance), runs with many contacts differ
+  by round-off grown chaotically (README "Validation": ~1 % on a relaxed coupon's tension).
 
-    python benchmarks/ranks.py [--quick] [--demo fast|full|none] [--write]
+    python benchmarks/ranks.py [--quick] [--repeat N] [--demo fast|full|none] [--write]
 
 The machine may be shared: each pair runs back to back so that both see the same load.
 """
@@ -41,20 +42,24 @@ DEMO_NUMBERS = (("tension", "initial_stiffness_n_m_per_width"),
                 ("picture_frame", "max_normalised_force_n_m"))
 
 
-def break_even(sizes, steps: int) -> list[list]:
-    """1 against 2 ranks on the fixed-step input, per coupon size."""
+def break_even(sizes, steps: int, repeat: int = 1) -> list[list]:
+    """1 against 2 ranks on the fixed-step input, per coupon size (best of ``repeat``
+    back-to-back pairs)."""
     cell = crimped_cell()
     rows = []
     for nx, ny in sizes:
         model = coupon(cell, nx, ny)
         folder = write_run_folder(ROOT / f"ranks-{nx}x{ny}", "scaling", model,
                                   fixed_steps_input(model, steps), {}, overwrite=True)
-        measured = []
-        for ranks in (1, 2):
-            t0 = time.perf_counter()
-            run_standalone(folder, input_name("scaling"), ranks=ranks)
-            measured.append((time.perf_counter() - t0, loop_time(folder / "log.lammps")))
-        (w1, l1), (w2, l2) = measured
+        best = {1: (float("inf"), float("inf")), 2: (float("inf"), float("inf"))}
+        for _ in range(repeat):
+            for ranks in (1, 2):
+                t0 = time.perf_counter()
+                run_standalone(folder, input_name("scaling"), ranks=ranks)
+                wall = time.perf_counter() - t0
+                best[ranks] = (min(best[ranks][0], wall),
+                               min(best[ranks][1], loop_time(folder / "log.lammps")))
+        (w1, l1), (w2, l2) = best[1], best[2]
         rows.append([f"{nx} x {ny} cells", model.n_beads, model.n_beads // 2, steps,
                      w1, w2, w1 / w2, l1 / l2])
     return rows
@@ -71,54 +76,71 @@ def fabmd_demo(out: Path, preset: str, np_option: list[str]) -> tuple[float, dic
     wall = time.perf_counter() - t0
     if done.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}):\n{done.stderr[-3000:]}")
-    chosen = next((line for line in done.stderr.splitlines() if "MPI rank" in line), "")
+    chosen = next((line for line in done.stderr.splitlines()
+                   if line.startswith("fabmd: ") and "MPI rank" in line), "")
     summary = json.loads((out / "summary.json").read_text())
     summary["chosen"] = chosen.removeprefix("fabmd: ")
     return wall, summary
 
 
-def demo_pair(preset: str) -> tuple[list[list], list[list], str]:
-    """The demo with the default choice and with ``--np 1``, back to back."""
+def demo_runs(preset: str) -> tuple[list[list], list[list], str]:
+    """The demo with the default choice and with ``--np 1``, back to back; and with one
+    rank per usable core when the default chose fewer (a loaded machine)."""
+    from fabmd.engine.ranks import usable_cores
+
     root = Path(tempfile.mkdtemp(prefix="fabmd-ranks-demo-"))
+    name = "demo" if preset == "default" else f"demo --{preset}"
     auto_wall, auto = fabmd_demo(root / "auto", preset, [])
     one_wall, one = fabmd_demo(root / "one", preset, ["--np", "1"])
-    times = [[f"demo{'' if preset == 'default' else ' --' + preset}, default choice",
-              auto["chosen"], auto_wall, one_wall / auto_wall],
-             [f"demo{'' if preset == 'default' else ' --' + preset} --np 1", "1 rank",
-              one_wall, 1.0]]
+    times = [[f"{name}, default choice", auto["chosen"] or "1 rank (no line)", auto_wall,
+              one_wall / auto_wall],
+             [f"{name} --np 1", "1 rank", one_wall, 1.0]]
+    runs = {"default choice": auto}
+    cores = usable_cores()
+    if f"{cores} MPI ranks" not in auto["chosen"] and cores > 1:
+        all_wall, every = fabmd_demo(root / "all", preset, ["--np", str(cores)])
+        times.append([f"{name} --np {cores}", f"{cores} ranks", all_wall,
+                      one_wall / all_wall])
+        runs[f"--np {cores}"] = every
     numbers = []
     for stage, key in DEMO_NUMBERS:
-        a, b = auto[stage].get(key), one[stage].get(key)
-        diff = abs(a - b) / abs(b) if isinstance(a, float) and isinstance(b, float) and b \
-            else ("same" if a == b else "n/a")
-        numbers.append([f"{stage}.{key}", a, b, diff])
-    return times, numbers, str(root)
+        b = one[stage].get(key)
+        row = [f"{stage}.{key}", b]
+        for summary in runs.values():
+            a = summary[stage].get(key)
+            row.append(abs(a - b) / abs(b) if isinstance(a, float) and isinstance(b, float)
+                       and b else ("same" if a == b else "n/a"))
+        numbers.append(row)
+    header = ["number", "--np 1"] + [f"relative difference, {k}" for k in runs]
+    return times, [header] + numbers, str(root)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smaller coupons, fewer steps")
+    parser.add_argument("--repeat", type=int, default=1, help="pairs per size (best of)")
     parser.add_argument("--demo", choices=["fast", "full", "none"], default="fast",
                         help="which demo pair to run (full: the default preset, minutes)")
     parser.add_argument("--write", action="store_true", help="update RESULTS.md")
     args = parser.parse_args()
     sizes = [(2, 2), (4, 2), (8, 4)] if args.quick else [(2, 2), (4, 2), (8, 4), (8, 8),
                                                          (16, 8), (16, 16)]
-    rows = break_even(sizes, 500 if args.quick else 2000)
-    body = [f"The machine is shared with other developers' jobs ({machine()}): each pair "
-            f"ran back to back.", "",
+    rows = break_even(sizes, 500 if args.quick else 2000, args.repeat)
+    load = os.getloadavg()[0]
+    body = [f"The machine is shared with other developers' jobs ({machine()}; 1-minute "
+            f"load average {load:.1f} after the break-even runs): each pair ran back to "
+            f"back, best of {args.repeat}.", "",
             "### Break-even: 1 against 2 MPI ranks (lmp -in, fixed-step input)", "",
             table(["coupon", "beads", "beads per rank (2)", "steps", "wall 1 rank [s]",
                    "wall 2 ranks [s]", "speed-up (wall)", "speed-up (loop)"], rows)]
     print(body[-1])
     if args.demo != "none":
         preset = "default" if args.demo == "full" else "fast"
-        times, numbers, where = demo_pair(preset)
+        times, numbers, where = demo_runs(preset)
         body += ["", f"### fabmd demo{'' if preset == 'default' else ' --' + preset}: "
-                 f"default choice against --np 1", "",
-                 table(["run", "ranks", "wall [s]", "speed-up"], times), "",
-                 table(["number", "default choice", "--np 1", "relative difference"],
-                       numbers)]
+                 f"default choice against --np 1 (back to back)", "",
+                 table(["run", "ranks", "wall [s]", "speed-up over --np 1"], times), "",
+                 table(numbers[0], numbers[1:])]
         print("\n".join(body[-4:]), f"\n(run folders in {where})")
     if args.write:
         update_section("Ranks", "\n".join(body),

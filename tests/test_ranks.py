@@ -25,15 +25,17 @@ def no_env(monkeypatch):
 
 
 def test_large_models_get_every_usable_core_small_ones_one(no_env):
-    big = choose_ranks(10 * MIN_BEADS_PER_RANK, cores=2)
+    big = choose_ranks(10 * MIN_BEADS_PER_RANK, cores=2, load=0)
     assert big.ranks == 2 and "2 usable cores" in big.reason
     assert f"{10 * MIN_BEADS_PER_RANK:,} beads" in big.line()
-    small = choose_ranks(MIN_BEADS_PER_RANK - 1, cores=2)
+    small = choose_ranks(MIN_BEADS_PER_RANK - 1, cores=2, load=0)
     assert small.ranks == 1 and f"{MIN_BEADS_PER_RANK:,} beads per rank" in small.reason
     # more cores than the model can use: as many ranks as it has MIN_BEADS_PER_RANK
-    assert choose_ranks(3 * MIN_BEADS_PER_RANK, cores=16).ranks == 3
-    assert choose_ranks(None, cores=8).ranks == 1  # size unknown: serial, and says why
-    assert "--np" in choose_ranks(None, cores=8).reason
+    assert choose_ranks(3 * MIN_BEADS_PER_RANK, cores=16, load=0).ranks == 3
+    assert choose_ranks(None, cores=8, load=0).ranks == 1  # size unknown: serial, and says why
+    assert "--np" in choose_ranks(None, cores=8, load=0).reason
+    # the line is printed for what was measured (and for every re-launch), not when told
+    assert big.measured and small.measured and not choose_ranks(None, cores=8, load=0).measured
 
 
 def test_np_beats_the_environment_which_beats_the_machine(no_env):
@@ -44,11 +46,11 @@ def test_np_beats_the_environment_which_beats_the_machine(no_env):
         return 10**6
 
     no_env.setenv(ranks.ENV_VARIABLE, "1")
-    assert choose_ranks(beads, cores=2) == ranks.RankChoice(1, "FABMD_NP=1")
-    assert choose_ranks(beads, requested=2, cores=2).ranks == 2
+    assert choose_ranks(beads, cores=2, load=0) == ranks.RankChoice(1, "FABMD_NP=1")
+    assert choose_ranks(beads, requested=2, cores=2, load=0).ranks == 2
     assert not asked  # the model is not even estimated when told
     no_env.setenv(ranks.ENV_VARIABLE, "auto")
-    assert choose_ranks(beads, cores=2).ranks == 2 and asked
+    assert choose_ranks(beads, cores=2, load=0).ranks == 2 and asked
 
 
 @pytest.mark.parametrize("value", ["0", "-2", "two"])
@@ -56,9 +58,19 @@ def test_a_bad_rank_count_is_one_line(no_env, value):
     no_env.setenv(ranks.ENV_VARIABLE, value)
     with pytest.raises(InputError, match=f"FABMD_NP must be a whole number >= 1 or 'auto', "
                                          f"got '{value}'"):
-        choose_ranks(100, cores=2)
+        choose_ranks(100, cores=2, load=0)
     with pytest.raises(InputError, match="--np must be a whole number >= 1, got 0"):
         choose_ranks(100, requested=0)
+
+
+def test_cores_other_jobs_keep_busy_are_not_used(no_env, monkeypatch):
+    """MPI ranks poll while they wait: on a loaded machine one rank beats two."""
+    monkeypatch.setattr(ranks.os, "cpu_count", lambda: 2)
+    busy = choose_ranks(10 * MIN_BEADS_PER_RANK, cores=2, load=1.2)
+    assert busy.ranks == 1 and "1 kept busy by other jobs" in busy.reason
+    assert ranks.free_cores(2, load=11.5) == 1  # never fewer than one
+    monkeypatch.setattr(ranks.os, "cpu_count", lambda: 64)  # 4 of 64 cores granted:
+    assert ranks.free_cores(4, load=60.0) == 4  # the others' load is on the other 60
 
 
 def test_usable_cores_are_the_affinity_not_the_machine(monkeypatch):
@@ -158,8 +170,8 @@ def test_sigterm_to_a_relaunched_command_stops_every_rank_and_resume_finishes(tm
     proc = subprocess.Popen(fabmd_command() + args, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=clean_env())
     deadline = time.time() + 120
-    while not (out / "crimp" / "in.crimp").exists() and time.time() < deadline:
-        time.sleep(0.02)  # the ranks catch signals once a stage folder is written
+    while not (out / "crimp" / "log.lammps").exists() and time.time() < deadline:
+        time.sleep(0.02)  # every rank catches signals once LAMMPS (collective) has started
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 5, err

@@ -10,7 +10,10 @@ The choice, in order of precedence: ``--np N`` (``requested``), the environment
 variable ``FABMD_NP`` (CI and the test suite set ``FABMD_NP=1`` so that parallel test
 workers do not oversubscribe the cores), else the usable cores of this process
 (``os.sched_getaffinity``: what a batch scheduler or ``taskset`` grants, not the
-machine's total) limited by the model size.
+machine's total) less those other jobs keep busy (:func:`free_cores`), limited by the
+model size. Busy cores count because MPI ranks wait for each other by polling: on the
+2-core development machine with a load of 11, 2 ranks ran every coupon size 1.9-14x
+slower than one (``benchmarks/RESULTS.md`` "Ranks").
 """
 
 from __future__ import annotations
@@ -50,6 +53,24 @@ def usable_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def free_cores(cores: int | None = None, load: float | None = None) -> int:
+    """Usable cores that other jobs do not keep busy (at least 1).
+
+    ``load`` (default: the 1-minute load average) counts runnable processes on the whole
+    machine; the part of it that cores outside this process's affinity could carry is
+    not held against it. Where the platform has no load average, every usable core.
+    """
+    cores = usable_cores() if cores is None else cores
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except (AttributeError, OSError):
+            return cores
+    elsewhere = max(0, (os.cpu_count() or cores) - cores)
+    busy = int(max(0.0, load - elsewhere) + 0.5)
+    return max(1, cores - busy)
+
+
 def _env_ranks() -> int | None:
     text = os.environ.get(ENV_VARIABLE, "").strip()
     if not text or text.lower() == "auto":
@@ -64,7 +85,7 @@ def _env_ranks() -> int | None:
 
 
 def choose_ranks(beads: int | None | Callable[[], int | None], requested: int | None = None,
-                 cores: int | None = None) -> RankChoice:
+                 cores: int | None = None, load: float | None = None) -> RankChoice:
     """Ranks for a model of ``beads`` beads (None: size unknown before the run).
 
     Args:
@@ -72,6 +93,8 @@ def choose_ranks(beads: int | None | Callable[[], int | None], requested: int | 
             ``requested`` nor ``FABMD_NP`` decides).
         requested: ``--np`` (None: not given).
         cores: usable cores (default :func:`usable_cores`).
+        load: the machine's load (default: its 1-minute load average; see
+            :func:`free_cores`).
 
     Raises:
         InputError: ``requested`` or ``FABMD_NP`` is not a whole number >= 1.
@@ -88,10 +111,13 @@ def choose_ranks(beads: int | None | Callable[[], int | None], requested: int | 
         beads = beads()
     if beads is None:
         return RankChoice(1, "model size not known before the run; --np N to choose")
+    free = free_cores(cores, load)
     by_size = max(1, beads // MIN_BEADS_PER_RANK)
-    ranks = min(cores, by_size)
-    where = f"{cores} usable core{'s' if cores > 1 else ''}, about {beads:,} beads"
-    if ranks < cores:
+    ranks = min(free, by_size)
+    where = f"{cores} usable core{'s' if cores > 1 else ''}" + \
+        (f", {cores - free} kept busy by other jobs" if free < cores else "") + \
+        f", about {beads:,} beads"
+    if by_size < free:
         return RankChoice(ranks, f"{where}: at least {MIN_BEADS_PER_RANK:,} beads per rank "
                                  f"pay for their communication", True)
     return RankChoice(ranks, where, True)
