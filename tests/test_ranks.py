@@ -180,3 +180,22 @@ def test_sigterm_to_a_relaunched_command_stops_every_rank_and_resume_finishes(tm
                       "--quiet", "--np", "2")
     assert resumed.returncode == 0, resumed.stderr
     assert (out / "tension" / "summary.json").exists()
+
+
+def test_without_mpirun_the_default_runs_serially_and_says_so(monkeypatch, capsys):
+    import fabmd.engine.library as library
+    from fabmd.cli import ranks as cli_ranks
+    from fabmd.errors import EngineUnavailable
+
+    def missing():
+        raise EngineUnavailable("no mpirun")
+
+    monkeypatch.delenv(ranks.ENV_VARIABLE, raising=False)
+    monkeypatch.setattr(library, "mpirun_executable", missing)
+    monkeypatch.setattr(ranks, "free_cores", lambda cores, load=None: cores)
+    monkeypatch.setattr(ranks, "usable_cores", lambda: 2)
+    monkeypatch.setattr(cli_ranks, "_estimate", lambda args: 10**6)
+    monkeypatch.setattr(relaunch, "under_mpirun", lambda: False)
+    args = argparse.Namespace(command="demo", ranks=None, backend="inprocess", threads=1)
+    assert cli_ranks.relaunch_if_worth_it(args, ["demo"]) is None
+    assert "no mpirun" in capsys.readouterr().err

