@@ -70,16 +70,11 @@ def run_under_mpirun(argv: list[str], ranks: int, threads: int = 1) -> int:
 
     old = {sig: signal.signal(sig, forward) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
-        while True:
-            try:
-                code = proc.wait()
-                break
-            except InterruptedError:  # pragma: no cover - PEP 475 retries wait() itself
-                continue
+        code = proc.wait()  # a signal runs forward() and the wait goes on (PEP 475)
     finally:
         for sig, handler in old.items():
             signal.signal(sig, handler)
-    # a rank killed by a signal: the shell's convention (128 + signal number)
+    # mpiexec itself killed by a signal: the shell's convention (128 + signal number)
     return 128 - code if code < 0 else code
 
 
