@@ -21,9 +21,9 @@ class Progress:
 
         tension: step 24000/120000  20.0 %  2 ranks  1,850 steps/s  elapsed 0:00:13  left 0:00:52
 
-    The speed is measured from the first call on (the engine calls once before the first
-    chunk, so a resumed run, which starts at its checkpoint's step, shows its own
-    speed); the time left is the steps left at that speed.
+    The speed is measured from the first call on (so a resumed run, which starts at its
+    checkpoint's step, shows its own speed; none is shown before the second call); the
+    time left is the steps left at that speed.
 
     Args:
         label: what is running (e.g. ``"tension"``).

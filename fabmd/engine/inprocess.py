@@ -157,8 +157,6 @@ class _Run:
 
     def commands_from(self, first: int, state: CheckpointState | None) -> None:
         """Send the commands from ``first`` on, each plain ``run`` in chunks."""
-        if self.total:
-            self.show()  # the progress line times its speed from here
         for index in range(first, len(self.commands)):
             command = self.commands[index]
             steps = plain_run_steps(command)
