@@ -12,6 +12,10 @@ import pytest
 
 BIN = Path(sys.executable).parent
 
+# one rank per command unless a test asks for more: the suite's pytest-xdist workers
+# already fill the cores (fabmd.engine.ranks would otherwise give each command all of them)
+os.environ.setdefault("FABMD_NP", "1")
+
 
 def fabmd_command() -> list[str]:
     """How to start the installed ``fabmd`` command (falls back to ``python -m fabmd``)."""

@@ -53,7 +53,7 @@ class SignalAt:
         self.label, self.fraction, self.signum = label, fraction, signum
         self.sent = False
 
-    def __call__(self, label: str):
+    def __call__(self, label: str, **options):  # Progress(label, ranks=...)
         def progress(done: int, total: int) -> None:
             if label == self.label and not self.sent and done >= self.fraction * total:
                 self.sent = True
@@ -132,7 +132,7 @@ import fabmd.engine.runner as runner
 from fabmd.cli import main
 
 class SignalAt:  # a progress display (rank 0 only) that SIGTERMs its own rank, once
-    def __init__(self, label):
+    def __init__(self, label, **options):  # Progress(label, ranks=...)
         self.label, self.sent = label, False
         self.done = 0
     def __call__(self, done, total):

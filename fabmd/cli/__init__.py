@@ -82,15 +82,31 @@ def main(argv: list[str] | None = None) -> int:
     install_warning_format()  # warnings as one "fabmd: warning: ..." line each
 
     try:
+        from .ranks import relaunch_if_worth_it
+
+        relaunched = relaunch_if_worth_it(args, argv)  # on every core: under mpirun
+        if relaunched is not None:
+            return relaunched
         return int(module.run(args) or 0)
     except FabmdError as exc:
         if args.traceback:
             raise
-        print(f"fabmd: error: {exc}", file=sys.stderr)
+        if _is_root():  # under mpirun every rank raises it: say it once
+            print(f"fabmd: error: {exc}", file=sys.stderr)
         return getattr(exc, "exit_code", 2)  # RunInterrupted: 5
     except KeyboardInterrupt:
         print("fabmd: interrupted", file=sys.stderr)
         return 130
+
+
+def _is_root() -> bool:
+    """Rank 0 (or no MPI); True where MPI itself is what failed."""
+    from ..engine import mpi
+
+    try:
+        return mpi.is_root()
+    except Exception:  # noqa: BLE001 - the error to print may be MPI's own
+        return True
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -17,8 +17,9 @@ def add_run_options(p: argparse.ArgumentParser, out_required: bool = False) -> N
     p.add_argument("--backend", choices=["inprocess", "standalone"], default="inprocess",
                    help="run LAMMPS in this process (default) or as 'mpirun lmp -in' "
                         "in the run folder")
-    p.add_argument("--np", type=int, default=1, dest="ranks",
-                   help="MPI ranks for --backend standalone (in-process: use mpirun fabmd)")
+    p.add_argument("--np", type=int, default=None, dest="ranks", metavar="N",
+                   help="MPI ranks (default: every usable core for a large model, one for "
+                        "a small one; env FABMD_NP); --np 1 runs serially")
     p.add_argument("--threads", type=int, default=1, help="OpenMP threads per rank")
     p.add_argument("--quiet", action="store_true", help="no progress line")
 

@@ -43,16 +43,24 @@ def _clock(seconds: float) -> str:
     return f"{seconds / 3600:.2g} h"
 
 
+def _beads(run_dir: Path, commands: list[str]) -> int | None:
+    for c in commands:
+        m = _READ_DATA.match(c)
+        if m:
+            return data_file_atoms(Path(run_dir) / m.group(1))
+    return None
+
+
+def input_beads(run_dir: Path, input_name: str) -> int | None:
+    """Beads of the data file the input reads (None: it reads none, or no count)."""
+    return _beads(run_dir, logical_lines((Path(run_dir) / input_name).read_text()))
+
+
 def stage_header(run_dir: Path, input_name: str, label: str, ranks: int = 1) -> str:
     """``tension: 4,096 beads, up to 120,000 steps, rough cost up to 1.2 min on 1 rank``."""
     commands = logical_lines((Path(run_dir) / input_name).read_text())
     steps = total_run_steps(commands)
-    beads = None
-    for c in commands:
-        m = _READ_DATA.match(c)
-        if m:
-            beads = data_file_atoms(Path(run_dir) / m.group(1))
-            break
+    beads = _beads(run_dir, commands)
     if beads is None:
         return f"{label}: up to {steps:,} steps"
     cost = SECONDS_PER_BEAD_STEP * beads * steps / max(1, ranks)

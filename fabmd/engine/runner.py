@@ -42,7 +42,8 @@ class Engine:
     Args:
         backend: ``"inprocess"`` (default; MPI ranks are those of the ``mpirun``
             that started Python) or ``"standalone"`` (``mpirun -np ranks lmp``).
-        ranks: MPI ranks for the standalone back end.
+        ranks: MPI ranks for the standalone back end (None: chosen per stage from its
+            bead count and the usable cores, :func:`fabmd.engine.ranks.choose_ranks`).
         threads: OpenMP threads per rank (``-sf omp``).
         progress: show progress on a terminal (in-process back end).
         checkpoint_every: steps between checkpoints of in-process runs (0: none);
@@ -50,7 +51,7 @@ class Engine:
     """
 
     backend: str = "inprocess"
-    ranks: int = 1
+    ranks: int | None = 1
     threads: int = 1
     progress: bool = True
     checkpoint_every: int = 0
@@ -59,7 +60,8 @@ class Engine:
         inputs.one_of("engine.backend", self.backend, BACKENDS)
         if self.checkpoint_every:
             inputs.positive_int("engine.checkpoint_every", self.checkpoint_every)
-        inputs.positive_int("engine.ranks", self.ranks)
+        if self.ranks is not None:
+            inputs.positive_int("engine.ranks", self.ranks)
         inputs.positive_int("engine.threads", self.threads)
 
     def run(self, run_dir: Path, input_name: str, label: str = "", monitor=None,
@@ -84,25 +86,39 @@ class Engine:
         t0 = time.perf_counter()
         if resume and self.backend != "inprocess":
             raise InputError("resume needs the in-process back end (it writes the checkpoints)")
+        label = label or input_name
+        ranks = mpi.size() if self.backend == "inprocess" else \
+            self.standalone_ranks(run_dir, input_name, label)
         if self.progress and mpi.is_root() and not resume:  # what the stage will cost
             from .estimate import stage_header
 
-            ranks = mpi.size() if self.backend == "inprocess" else self.ranks
-            print(stage_header(run_dir, input_name, label or input_name, ranks),
-                  file=sys.stderr, flush=True)
+            print(stage_header(run_dir, input_name, label, ranks), file=sys.stderr,
+                  flush=True)
         if self.backend == "inprocess":
-            bar = Progress(label or input_name) if self.progress and mpi.is_root() else None
+            bar = Progress(label, ranks=ranks) if self.progress and mpi.is_root() else None
             run_inprocess(run_dir, input_name, threads=self.threads, progress=bar,
                           monitor=monitor, monitor_every=monitor_every,
                           checkpoint_every=self.checkpoint_every, resume=resume)
-            ranks = mpi.size()
         else:
-            run_standalone(run_dir, input_name, ranks=self.ranks, threads=self.threads)
-            ranks = self.ranks
+            run_standalone(run_dir, input_name, ranks=ranks, threads=self.threads)
         return EngineResult(self.backend, time.perf_counter() - t0, ranks, self.threads)
 
+    def standalone_ranks(self, run_dir: Path, input_name: str, label: str) -> int:
+        """The standalone back end's ranks for this stage: as set, or (``ranks=None``)
+        chosen from the stage's bead count, said in one line."""
+        if self.ranks is not None:
+            return self.ranks
+        from .estimate import input_beads
+        from .ranks import choose_ranks
 
-def make_engine(backend: str = "inprocess", ranks: int = 1, threads: int = 1,
+        choice = choose_ranks(input_beads(run_dir, input_name))
+        if self.progress and mpi.is_root():
+            print(f"{label}: {choice.line().removeprefix('fabmd: ')}", file=sys.stderr,
+                  flush=True)
+        return choice.ranks
+
+
+def make_engine(backend: str = "inprocess", ranks: int | None = 1, threads: int = 1,
                 progress: bool = True) -> Engine:
     """An :class:`Engine` (validated)."""
     return Engine(backend=backend, ranks=ranks, threads=threads, progress=progress)

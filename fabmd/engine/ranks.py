@@ -1,0 +1,123 @@
+"""How many MPI ranks a run gets: every usable core, unless the model is too small.
+
+Splitting a model over ranks pays only when each rank keeps enough beads that its
+share of the pair and bond work outweighs the exchange of ghost beads every step.
+``MIN_BEADS_PER_RANK`` is that break-even, measured on the 2-core development machine
+(``benchmarks/ranks.py``, ``benchmarks/RESULTS.md`` "Ranks"): below it a second rank
+costs more in communication than it saves.
+
+The choice, in order of precedence: ``--np N`` (``requested``), the environment
+variable ``FABMD_NP`` (CI and the test suite set ``FABMD_NP=1`` so that parallel test
+workers do not oversubscribe the cores), else the usable cores of this process
+(``os.sched_getaffinity``: what a batch scheduler or ``taskset`` grants, not the
+machine's total) less those other jobs keep busy (:func:`free_cores`), limited by the
+model size. Busy cores count because MPI ranks wait for each other by polling: on the
+2-core development machine with a load of 11, 2 ranks ran every coupon size 1.9-14x
+slower than one (``benchmarks/RESULTS.md`` "Ranks").
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from ..errors import InputError
+
+#: environment variable that sets the ranks when ``--np`` is not given
+ENV_VARIABLE = "FABMD_NP"
+#: fewest beads per rank for which another rank pays (see the module docstring)
+MIN_BEADS_PER_RANK = 4000
+
+
+@dataclass(frozen=True)
+class RankChoice:
+    """A number of ranks and why (``reason``: one line for the terminal); ``measured``:
+    decided from the machine and a known model size (not told, not a default)."""
+
+    ranks: int
+    reason: str
+    measured: bool = False
+
+    def line(self) -> str:
+        """``fabmd: 2 MPI ranks (2 usable cores, 12,000 beads)``."""
+        return f"fabmd: {self.ranks} MPI rank{'s' if self.ranks > 1 else ''} ({self.reason})"
+
+
+def usable_cores() -> int:
+    """Cores this process may run on (its CPU affinity; ``os.cpu_count()`` where the
+    platform has no affinity)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def free_cores(cores: int | None = None, load: float | None = None) -> int:
+    """Usable cores that other jobs do not keep busy (at least 1).
+
+    ``load`` (default: the 1-minute load average) counts runnable processes on the whole
+    machine; the part of it that cores outside this process's affinity could carry is
+    not held against it. Where the platform has no load average, every usable core.
+    """
+    cores = usable_cores() if cores is None else cores
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except (AttributeError, OSError):
+            return cores
+    elsewhere = max(0, (os.cpu_count() or cores) - cores)
+    busy = int(max(0.0, load - elsewhere) + 0.5)
+    return max(1, cores - busy)
+
+
+def _env_ranks() -> int | None:
+    text = os.environ.get(ENV_VARIABLE, "").strip()
+    if not text or text.lower() == "auto":
+        return None
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise InputError(f"{ENV_VARIABLE} must be a whole number >= 1 or 'auto', got {text!r}")
+    return value
+
+
+def choose_ranks(beads: int | None | Callable[[], int | None], requested: int | None = None,
+                 cores: int | None = None, load: float | None = None) -> RankChoice:
+    """Ranks for a model of ``beads`` beads (None: size unknown before the run).
+
+    Args:
+        beads: the count, or a function that estimates it (called only when neither
+            ``requested`` nor ``FABMD_NP`` decides).
+        requested: ``--np`` (None: not given).
+        cores: usable cores (default :func:`usable_cores`).
+        load: the machine's load (default: its 1-minute load average; see
+            :func:`free_cores`).
+
+    Raises:
+        InputError: ``requested`` or ``FABMD_NP`` is not a whole number >= 1.
+    """
+    if requested is not None:
+        if requested < 1:
+            raise InputError(f"--np must be a whole number >= 1, got {requested}")
+        return RankChoice(requested, "--np")
+    env = _env_ranks()
+    if env is not None:
+        return RankChoice(env, f"{ENV_VARIABLE}={env}")
+    cores = usable_cores() if cores is None else cores
+    if callable(beads):
+        beads = beads()
+    if beads is None:
+        return RankChoice(1, "model size not known before the run; --np N to choose")
+    free = free_cores(cores, load)
+    by_size = max(1, beads // MIN_BEADS_PER_RANK)
+    ranks = min(free, by_size)
+    where = f"{cores} usable core{'s' if cores > 1 else ''}" + \
+        (f", {cores - free} kept busy by other jobs" if free < cores else "") + \
+        f", about {beads:,} beads"
+    if by_size < free:
+        return RankChoice(ranks, f"{where}: at least {MIN_BEADS_PER_RANK:,} beads per rank "
+                                 f"pay for their communication", True)
+    return RankChoice(ranks, where, True)
