@@ -94,9 +94,52 @@ def test_scan_finds_command_text():
 
 
 def test_no_lammps_text_in_protocols():
+    """The protocols and the input blocks take their LAMMPS text from lammps_templates/."""
     root = Path(__file__).resolve().parents[1]
-    found = [f"{p.relative_to(root)}:{n}: {line}"
-             for p in sorted((root / "fabmd" / "protocols").rglob("*.py"))
+    files = [*sorted((root / "fabmd" / "protocols").rglob("*.py")),
+             root / "fabmd" / "scene" / "blocks.py"]
+    found = [f"{p.relative_to(root)}:{n}: {line}" for p in files
              if p.relative_to(root).as_posix() not in PENDING
              for n, line in lammps_command_lines(p.read_text())]
     assert not found, "LAMMPS text outside lammps_templates/:\n" + "\n".join(found)
+
+
+# -- input blocks that replace text edits after rendering ---------------------------------
+def test_bond_ramp_and_its_end():
+    from fabmd.scene import blocks
+
+    from .fabrics import plain_weave_cell
+
+    model = plain_weave_cell(spacing_m=1e-3)
+    r0 = [bt.rest_length_m for bt in model.bond_type_table]
+    start = blocks.bond_ramp(model, "crimp", {1: -0.02, 2: 0.0})
+    assert start.splitlines() == [
+        f'variable        r0_1 equal "{r0[0]:.10g}*(1+-0.02*ramp(0,1))"',
+        "fix             crimp all adapt 1 bond harmonic r0 1 v_r0_1 reset no"]
+    shrink = blocks.bond_ramp(model, "pre", {2: 0.01}, shrink=True)
+    assert f'r0_2 equal "{r0[1]:.10g}*(1-0.01*ramp(0,1))"' in shrink
+    nothing = blocks.bond_ramp(model, "crimp", {1: 0.0})
+    assert f"variable        r0_1 equal {r0[0]:.10g}\n" in nothing
+    end = blocks.bond_ramp_end(model, "pre", {2: 0.99}, [2], note=", preloaded")
+    assert end.splitlines()[0] == "unfix           pre"
+    assert end.splitlines()[1].startswith("bond_coeff      2 ")
+    assert end.endswith(f"{r0[1] * 0.99:.10g}   # weft, preloaded")
+    # all types by default, as bonds() writes them
+    coeffs = [line for line in blocks.bonds(model).splitlines() if line.startswith("bond_c")]
+    assert blocks.bond_coeffs(model).splitlines() == coeffs == \
+        blocks.bond_ramp_end(model, "x", {}).splitlines()[1:]
+
+
+def test_groups_and_lost_check():
+    from fabmd.scene import blocks
+
+    from .fabrics import plain_weave_cell
+
+    assert blocks.group_ids("held", []) == "group           held empty"
+    text = blocks.group_ids("held", range(1, 21))
+    assert text.startswith("group           held id 1 2 ") and text.count(" &\n    ") == 1
+    model = plain_weave_cell(spacing_m=1e-3)
+    guarded = blocks.guards(model, 1e-7)
+    assert blocks.lost_check() + "\n" in guarded
+    assert blocks.guards(model, 1e-7, check_lost=False) == \
+        guarded.replace(blocks.lost_check(), "")

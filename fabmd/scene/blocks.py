@@ -223,8 +223,8 @@ def tool_region(tool: ToolContact, beads: list[BeadParameters], region_id: str,
     region may move (``region ... move``) and its velocity enters the friction.
     ``contacts`` keeps the per-bead contact array that :func:`overlap_monitor` reads.
     """
-    return _tool_contact(tool, beads, fix_id, group, "wall/gran/region", f"region {region_id}",
-                         contacts)
+    return _tool_contact(tool, beads, fix_id, group, "wall/gran/region",
+                         render_inline("wall_region", region_id=region_id), contacts)
 
 
 def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
@@ -235,8 +235,9 @@ def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
         raise ValueError(f"axis must be 'x', 'y' or 'z', got {axis!r}")
     if lo_m is None and hi_m is None:
         raise ValueError("tool_plane needs lo_m or hi_m")
-    where = f"{axis}plane {'NULL' if lo_m is None else fmt(float(lo_m))} " \
-            f"{'NULL' if hi_m is None else fmt(float(hi_m))}"
+    where = render_inline("wall_plane", axis=axis,
+                          lo="NULL" if lo_m is None else float(lo_m),
+                          hi="NULL" if hi_m is None else float(hi_m))
     return _tool_contact(tool, beads, fix_id, group, "wall/gran", where, contacts)
 
 
@@ -274,14 +275,14 @@ def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
             pair_lines = render("overlap_pair_force", force_to_overlap=text,
                                 overlap_formula=formula, diameter=d_min)
     else:
-        pair_lines = "variable        fabmd_pair_overlap equal 0.0"
+        pair_lines = render_inline("overlap_pair_none")
     tool_lines = [render("overlap_tool", fix_id=f) for f in tool_fixes]
     tool_overlap = "0.0"
     for f in tool_fixes:
         c = f"c_fabmd_tool_max_{f}"
         tool_overlap = c if tool_overlap == "0.0" else \
             f"ternary({c}>{tool_overlap},{c},{tool_overlap})"
-    tool_lines.append(f'variable        fabmd_tool_overlap equal "{tool_overlap}"')
+    tool_lines.append(render_inline("overlap_tool_max", tool_overlap=tool_overlap))
     warning = contact_model.overlap_warning if pair else TOOL_OVERLAP_WARNING
     limit = contact_model.overlap_limit if pair else TOOL_OVERLAP_LIMIT
     return render("overlap_monitor", every=int(every), file=file, warning=warning, limit=limit,
