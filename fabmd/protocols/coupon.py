@@ -32,7 +32,7 @@ from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
-from ..scene.templates import render
+from ..scene.templates import render, render_inline
 from .common import (
     DATA_FILE,
     overlap_summary,
@@ -151,10 +151,7 @@ class Coupon:
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
             blocks.overlap_monitor(model, self.contact, beads),
-            "group           held empty\ngroup           free subtract all held\n"
-            "fix             integrate free nve\n"
-            "# a free coupon has nothing to stop rigid drift; local damping does not see it\n"
-            "fix             no_drift all momentum 100 linear 1 1 1 angular",
+            render_inline("coupon_free"),
             blocks.guards(model, dt),  # before the relaxation: it is the run to guard
             blocks.relax(model, dt, "held", "free", self.relax, ref,
                          int(model.fibre_bond_mask().sum()) * ref**2 / (2 * k),

@@ -48,7 +48,7 @@ from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import Damping, QuasiStatic
-from ..scene.templates import fmt, render
+from ..scene.templates import render
 from .common import (
     DATA_FILE,
     overlap_summary,
@@ -193,36 +193,20 @@ class Crimp:
         every = self.plan(model).every
         held = self.held_beads(model)
         if len(held):
-            ids = [str(i + 1) for i in held]
-            lines = [" ".join(ids[k:k + 16]) for k in range(0, len(ids), 16)]
-            held_group = "group           held id " + " &\n    ".join(lines)
             hold_fix = "# held beads are not integrated: they keep their position"
         else:
-            held_group = "group           held empty"
             hold_fix = "# periodic cell: nothing is held"
         scale = self.rest_length_scale(model)
-        adapt_vars, adapt_args = [], []
-        for i, bt in enumerate(model.bond_type_table, start=1):
-            strain = scale[i] - 1.0
-            if strain == 0.0:
-                continue
-            adapt_vars.append(f"variable        r0_{i} equal \"{fmt(bt.rest_length_m)}*"
-                              f"(1+{fmt(strain)}*ramp(0,1))\"")
-            adapt_args.append(f"bond harmonic r0 {i} v_r0_{i}")
-        if not adapt_args:  # nothing to ramp: relax only
-            r0 = fmt(model.bond_type_table[0].rest_length_m)
-            adapt_vars.append(f"variable        r0_1 equal {r0}")
-            adapt_args.append("bond harmonic r0 1 v_r0_1")
-        final = blocks.bonds(model, rest_length_scale=scale).split("\n")
-        final_coeffs = "\n".join(line for line in final if line.startswith("bond_coeff"))
+        strains = {i: scale[i] - 1.0 for i in scale}
         mass = float(np.median(model.masses))
         text = render(
-            "crimp", held_group=held_group, adapt_variables="\n".join(adapt_vars),
-            adapt_args=" ".join(adapt_args), hold_fix=hold_fix,
+            "crimp", held_group=blocks.group_ids("held", held + 1),
+            ramp=blocks.bond_ramp(model, "crimp", strains), hold_fix=hold_fix,
             damping=self.damping.commands("free", mass, default_time_s=ramp * dt / 10),
             monitors=self.quasi_static.monitors("free", self.reference_force_n(model),
                                                 self.reference_energy_j(model)),
-            every=every, ramp_steps=ramp, final_bond_coeffs=final_coeffs,
+            every=every, ramp_steps=ramp,
+            ramp_end=blocks.bond_ramp_end(model, "crimp", scale),
             stop_fix=self.quasi_static.stop_when_reached(),
             relax_steps=self.quasi_static.max_steps)
         max_scale = max(1.0, *scale.values())
@@ -231,12 +215,11 @@ class Crimp:
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
             blocks.overlap_monitor(model, self.contact, beads, every=every),
-            blocks.guards(model, dt, max_rest_length_scale=max_scale).replace(
-                "thermo_modify   lost error lost/bond error", ""),
+            blocks.guards(model, dt, max_rest_length_scale=max_scale, check_lost=False),
             self.trajectory.commands(self.expected_steps(model)),
             text,
             self.trajectory.final_commands(),
-            "thermo_modify   lost error lost/bond error",
+            blocks.lost_check(),
             render("finish", final_data=f"{CRIMPED}.data"),
         ])
 

@@ -41,7 +41,7 @@ from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
 from ..scene.quasi_static import QuasiStatic
-from ..scene.templates import fmt, render
+from ..scene.templates import render, render_inline
 from .driven import (
     DrivenResult,
     DrivenTest,
@@ -103,10 +103,10 @@ class _PeriodicCellTest(DrivenTest):
                       outputs=outputs)
         return self.scene_text(model, dt, text)
 
-    def _schedule(self, model: BeadModel) -> str:
+    def _schedule(self, model: BeadModel) -> dict[str, str]:
+        """Boundary travel s(t) [m] and its rate [m/s] as LAMMPS expressions."""
         load = self.loading(model)
-        return (f'variable        s equal "{load.lammps_displacement()}"\n'
-                f'variable        s_rate equal "{load.lammps_velocity()}"')
+        return {"displacement": load.lammps_displacement(), "velocity": load.lammps_velocity()}
 
     def _common_summary(self, model: BeadModel, out, progress, plan: RunPlan) -> dict:
         started = started_mask(out, plan.loading, progress)
@@ -174,14 +174,7 @@ class PeriodicTension(_PeriodicCellTest):
         return self.cell(model)[0] * self.max_strain_pct / 100
 
     def box_motion(self, model: BeadModel) -> str:
-        return "\n".join([
-            "# the box grows along x: lx = lx0 + s(t)",
-            self._schedule(model),
-            "variable        rate_lx equal v_s_rate",
-            "variable        rate_ly equal 0.0",
-            "variable        rate_xy equal 0.0",
-            "fix             box all deform 1 x variable v_s v_s_rate remap v",
-        ])
+        return render_inline("periodic_tension_box", **self._schedule(model))
 
     def transverse_block(self, model: BeadModel) -> str:
         if self.transverse == "held":
@@ -195,18 +188,8 @@ class PeriodicTension(_PeriodicCellTest):
         modulus = 0.1 * n_fibres * ea / (ly * lz)
         pdamp = self.transverse_damping_fraction * self.duration_s(model)
         settle = math.ceil(10 * pdamp / self.time_step_s(model))
-        return "\n".join([
-            "# transverse membrane force driven to zero: the box's y size follows (Berendsen);",
-            "# no bead is dilated (empty group, dilate partial): the box drags them.",
-            "# Before the test it settles for ten time constants (damped), so that the test",
-            "# starts from zero transverse force",
-            "group           nobody empty",
-            f"fix             transverse nobody press/berendsen y 0.0 0.0 {fmt(pdamp)} "
-            f"modulus {fmt(modulus)} dilate partial",
-            "fix             settle_damping free damping/cundall 0.7 0.0",
-            f"run             {settle}",
-            "unfix           settle_damping",
-        ])
+        return render_inline("periodic_transverse_free", pdamp=pdamp, modulus=modulus,
+                             settle_steps=settle)
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
@@ -290,22 +273,8 @@ class PeriodicShear(_PeriodicCellTest):
         return self.cell(model)[1] * math.radians(self.max_shear_angle_deg)
 
     def box_motion(self, model: BeadModel) -> str:
-        b = fmt(self.cell(model)[1])
-        return "\n".join([
-            "# the edge along y (length b) turns by gamma = s(t)/b: ly = b cos(gamma),",
-            "# xy = b sin(gamma); the edge along x stays: both fibre families keep their length",
-            "change_box      all triclinic",
-            self._schedule(model),
-            f'variable        gam equal "v_s/{b}"',
-            f'variable        gam_rate equal "v_s_rate/{b}"',
-            f'variable        dly equal "{b}*(cos(v_gam)-1)"',
-            f'variable        dxy equal "{b}*sin(v_gam)"',
-            "variable        rate_lx equal 0.0",
-            f'variable        rate_ly equal "-{b}*sin(v_gam)*v_gam_rate"',
-            f'variable        rate_xy equal "{b}*cos(v_gam)*v_gam_rate"',
-            "fix             box all deform 1 y variable v_dly v_rate_ly "
-            "xy variable v_dxy v_rate_xy remap v flip no",
-        ])
+        return render_inline("periodic_shear_box", b=self.cell(model)[1],
+                             **self._schedule(model))
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:

@@ -43,6 +43,7 @@ from ..model.contact import ContactModel
 from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..results.figure import report_marks
+from ..scene import blocks
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
@@ -290,21 +291,16 @@ class PictureFrame(DrivenTest):
         if not types or self.pretension_strain == 0:
             return "# no clamping preload"
         s = self.pretension_strain
-        variables, args, coeffs = [], [], []
-        for t in types:
-            bt = model.bond_type_table[t - 1]
-            variables.append(f"variable        r0_{t} equal \"{fmt(bt.rest_length_m)}*"
-                             f"(1-{fmt(s)}*ramp(0,1))\"")
-            args.append(f"bond harmonic r0 {t} v_r0_{t}")
-            coeffs.append(f"bond_coeff      {t} {fmt(bt.coefficient)} "
-                          f"{fmt(bt.rest_length_m * (1 - s))}   # {bt.family}, preloaded")
         beads = model_bead_parameters(model)
         longest = int(np.bincount(model.fibre_ids).max())
         transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
         steps = max(1000, int(self.pretension_transits * transit / self.time_step_s(model)))
         return render("pretension", strain=s, held="clamps", free="free",
-                      adapt_variables="\n".join(variables), adapt_args=" ".join(args),
-                      steps=steps, final_bond_coeffs="\n".join(coeffs))
+                      ramp=blocks.bond_ramp(model, "pretension", dict.fromkeys(types, s),
+                                            shrink=True),
+                      steps=steps, ramp_end=blocks.bond_ramp_end(
+                          model, "pretension", dict.fromkeys(types, 1 - s), types,
+                          note=", preloaded"))
 
     # -- input ------------------------------------------------------------------------
     def input_text(self, model: BeadModel) -> str:

@@ -9,7 +9,7 @@ import numpy as np
 from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
 from ..model.contact import ContactModel, ToolContact
-from .templates import fmt, render
+from .templates import fmt, render, render_inline
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
 SKIN_FRACTION = 0.2
@@ -56,27 +56,89 @@ def setup(model: BeadModel, protocol: str, data_file: str, time_step_s: float) -
                   skin=neighbour_skin(model), time_step=time_step_s)
 
 
+def bond_coeffs(model: BeadModel, rest_length_scale: dict[int, float] | None = None,
+                types: list[int] | None = None, note: str = "") -> str:
+    """``bond_coeff`` lines of the bond types ``types`` (1-based; None: all), each with its
+    rest length [m] times ``rest_length_scale[type]`` (default 1) and a comment naming the
+    family, the kind of non-fibre bonds, then ``note``."""
+    scale = rest_length_scale or {}
+    table = model.bond_type_table
+    wanted = range(1, len(table) + 1) if types is None else types
+    lines = []
+    for i in wanted:
+        bt = table[i - 1]
+        lines.append(render_inline(
+            "bond_coeff", type=i, coefficient=bt.coefficient,
+            rest_length=bt.rest_length_m * scale.get(i, 1.0), family=bt.family,
+            note=("" if bt.kind == "fibre" else f" {bt.kind}") + note))
+    return "\n".join(lines)
+
+
 def bonds(model: BeadModel, rest_length_scale: dict[int, float] | None = None) -> str:
     """``bond_style harmonic`` with one coefficient line per bond type (and angles)."""
-    scale = rest_length_scale or {}
-    lines = [f"bond_coeff      {i} {fmt(bt.coefficient)} "
-             f"{fmt(bt.rest_length_m * scale.get(i, 1.0))}   # {bt.family}"
-             + ("" if bt.kind == "fibre" else f" {bt.kind}")
-             for i, bt in enumerate(model.bond_type_table, start=1)]
     table = model.angle_type_table
     if table and len(model.angles):
-        angle = ["angle_style     cosine"]
-        angle += [f"angle_coeff     {i} {fmt(at.coefficient)}   # {at.family}"
-                  for i, at in enumerate(table, start=1)]
-        angle_block = "\n".join(angle)
+        angle_block = render_inline("angle_style", angle_coeffs="\n".join(
+            render_inline("angle_coeff", type=i, coefficient=at.coefficient, family=at.family)
+            for i, at in enumerate(table, start=1)))
     else:
         angle_block = "# no bending term in this scene"
-    return render("bonds", bond_coeffs="\n".join(lines), angle_block=angle_block)
+    return render("bonds", bond_coeffs=bond_coeffs(model, rest_length_scale),
+                  angle_block=angle_block)
+
+
+def bond_ramp(model: BeadModel, fix_id: str, strains: dict[int, float],
+              shrink: bool = False) -> str:
+    """Start ramping the rest length of bond types (1-based keys of ``strains``) over the
+    next ``run``: r0·(1 + strain·ramp(0,1)) (``shrink``: r0·(1 − strain·ramp(0,1))), one
+    ``fix adapt`` named ``fix_id``. Types with zero strain keep their rest length; with none
+    left, type 1 is adapted to its own rest length (a ramp that changes nothing). End it
+    with :func:`bond_ramp_end`."""
+    table = model.bond_type_table
+    ramped = [(i, s) for i, s in strains.items() if s != 0.0]
+    if ramped:
+        variables = [render_inline("bond_ramp_variable", type=i,
+                                   rest_length=table[i - 1].rest_length_m,
+                                   sign="-" if shrink else "+", strain=s) for i, s in ramped]
+    else:  # nothing to ramp
+        ramped = [(1, 0.0)]
+        variables = [render_inline("bond_ramp_fixed", type=1,
+                                   rest_length=table[0].rest_length_m)]
+    args = " ".join(render_inline("bond_ramp_adapt", type=i) for i, _ in ramped)
+    return render_inline("bond_ramp", variables="\n".join(variables), fix_id=fix_id,
+                         adapt_args=args)
+
+
+def bond_ramp_end(model: BeadModel, fix_id: str, rest_length_scale: dict[int, float],
+                  types: list[int] | None = None, note: str = "") -> str:
+    """After the ramp run: drop ``fix_id`` and keep the final rest lengths (``bond_coeff``
+    of ``types``, None: all, see :func:`bond_coeffs`)."""
+    return render_inline("bond_ramp_end", fix_id=fix_id,
+                         bond_coeffs=bond_coeffs(model, rest_length_scale, types, note))
+
+
+def group_ids(name: str, atom_ids) -> str:
+    """``group <name> id ...`` of LAMMPS atom ids (1-based), 16 a line; an empty group
+    when there are none."""
+    ids = [str(int(i)) for i in atom_ids]
+    if not ids:
+        return render_inline("group_empty", group=name)
+    rows = [" ".join(ids[k:k + 16]) for k in range(0, len(ids), 16)]
+    return render_inline("group_ids", group=name, ids=" &\n    ".join(rows))
+
+
+def lost_check() -> str:
+    """Atoms or bond partners lost are errors (``thermo_modify lost``)."""
+    return render_inline("lost_check")
 
 
 def guards(model: BeadModel, time_step_s: float, every: int = 20,
-           max_rest_length_scale: float = 1.0) -> str:
-    """Stability guards (see :mod:`fabmd.engine.diagnosis` for the causes)."""
+           max_rest_length_scale: float = 1.0, check_lost: bool = True) -> str:
+    """Stability guards (see :mod:`fabmd.engine.diagnosis` for the causes).
+
+    ``check_lost=False`` leaves out :func:`lost_check` (a blank line instead), for an
+    input that puts it after its runs.
+    """
     shortest = min((bt.rest_length_m for bt in model.bond_type_table),
                    default=float(model.diameters.min()))
     speed_limit = SPEED_FRACTION * shortest / time_step_s
@@ -87,7 +149,8 @@ def guards(model: BeadModel, time_step_s: float, every: int = 20,
     else:
         bond_guard = "# no bonds: no bond-stretch guard"
     return render("guards", speed_fraction=SPEED_FRACTION, speed_limit=speed_limit,
-                  every=every, bond_guard=bond_guard)
+                  every=every, bond_guard=bond_guard,
+                  lost_check=lost_check() if check_lost else "")
 
 
 def trajectory(every: int, *, velocities: bool = False, bond_forces: bool = True) -> str:
@@ -160,8 +223,8 @@ def tool_region(tool: ToolContact, beads: list[BeadParameters], region_id: str,
     region may move (``region ... move``) and its velocity enters the friction.
     ``contacts`` keeps the per-bead contact array that :func:`overlap_monitor` reads.
     """
-    return _tool_contact(tool, beads, fix_id, group, "wall/gran/region", f"region {region_id}",
-                         contacts)
+    return _tool_contact(tool, beads, fix_id, group, "wall/gran/region",
+                         render_inline("wall_region", region_id=region_id), contacts)
 
 
 def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
@@ -172,8 +235,9 @@ def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
         raise ValueError(f"axis must be 'x', 'y' or 'z', got {axis!r}")
     if lo_m is None and hi_m is None:
         raise ValueError("tool_plane needs lo_m or hi_m")
-    where = f"{axis}plane {'NULL' if lo_m is None else fmt(float(lo_m))} " \
-            f"{'NULL' if hi_m is None else fmt(float(hi_m))}"
+    where = render_inline("wall_plane", axis=axis,
+                          lo="NULL" if lo_m is None else float(lo_m),
+                          hi="NULL" if hi_m is None else float(hi_m))
     return _tool_contact(tool, beads, fix_id, group, "wall/gran", where, contacts)
 
 
@@ -211,14 +275,14 @@ def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
             pair_lines = render("overlap_pair_force", force_to_overlap=text,
                                 overlap_formula=formula, diameter=d_min)
     else:
-        pair_lines = "variable        fabmd_pair_overlap equal 0.0"
+        pair_lines = render_inline("overlap_pair_none")
     tool_lines = [render("overlap_tool", fix_id=f) for f in tool_fixes]
     tool_overlap = "0.0"
     for f in tool_fixes:
         c = f"c_fabmd_tool_max_{f}"
         tool_overlap = c if tool_overlap == "0.0" else \
             f"ternary({c}>{tool_overlap},{c},{tool_overlap})"
-    tool_lines.append(f'variable        fabmd_tool_overlap equal "{tool_overlap}"')
+    tool_lines.append(render_inline("overlap_tool_max", tool_overlap=tool_overlap))
     warning = contact_model.overlap_warning if pair else TOOL_OVERLAP_WARNING
     limit = contact_model.overlap_limit if pair else TOOL_OVERLAP_LIMIT
     return render("overlap_monitor", every=int(every), file=file, warning=warning, limit=limit,

@@ -44,7 +44,7 @@ def fmt(value) -> str:
     return str(value)
 
 
-def render(name: str, **values) -> str:
+def render(name: str, /, **values) -> str:
     """Fill template ``name`` with ``values``.
 
     Raises:
@@ -57,3 +57,9 @@ def render(name: str, **values) -> str:
     if missing or unused:
         raise KeyError(f"template {name}: missing {sorted(missing)}, unused {sorted(unused)}")
     return _PLACEHOLDER.sub(lambda m: fmt(values[m.group(1)]), text)
+
+
+def render_inline(name: str, /, **values) -> str:
+    """:func:`render` without the template's final newline: a fragment that fills a
+    placeholder line of another template (or joins with others line by line)."""
+    return render(name, **values).removesuffix("\n")
