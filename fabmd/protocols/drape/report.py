@@ -32,7 +32,7 @@ def plot_specs(depth: np.ndarray, punch: np.ndarray, holder: np.ndarray, set_for
         {"path": "holder_force.png",
          "series": [{"x": 1e3 * depth, "y": holder, "label": "blank holder"},
                     {"x": [0.0, 1e3 * float(depth[-1])], "y": [set_force, set_force],
-                     "style": "--", "label": "set force", "lw": 1.0}],
+                     "style": "--", "label": "target force", "lw": 1.0}],
          "xlabel": "depth [mm]", "ylabel": "blank-holder force [N]",
          "title": "Blank-holder force (force control)",
          "notes": f"max error after clamping {max_holder_error:.3g}"
