@@ -52,9 +52,8 @@ LAMMPS_COMMANDS = frozenset("""
     special_bonds thermo thermo_modify thermo_style timestep uncompute undump unfix units
     variable velocity write_data write_dump write_restart""".split())
 _COMMAND_LINE = re.compile(r"\s*([a-z_]+)\s+\S")
-#: modules not yet converted, by exact path: drape.py becomes the package protocols/drape/
-#: (issue #15, another branch), which this scan then covers
-PENDING: set[str] = set()  # files not yet converted (none)
+#: modules not yet converted, by exact path (none left)
+PENDING: set[str] = set()
 
 
 def _docstrings(tree: ast.AST) -> set[int]:
