@@ -46,6 +46,10 @@ compaction that sets yarn narrowing and shear locking) touch with
 ``pair_style granular`` with one ``pair_coeff i j`` per type pair (the classic
 ``gran/*`` styles take one global set of coefficients), about 2.5× the loop time
 (section "Pair styles"); Hooke only. The time step follows the stiffer of the two.
+Measured (``benchmarks/RESULTS.md``, "Split contact"): with the glass law's k' (secant at
+100 kPa) a yarn of 7 virtual fibres cannot carry a crossing's concentrated load through
+its thickness — crimping the plain-weave example towards 1 cN/tex pushes fibres of one
+yarn through each other (overlap > 0.5 d at −6 %); a linear contact has no packing limit.
 
 Older settings still work and are flagged as discretisation-dependent:
 ``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
