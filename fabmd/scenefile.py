@@ -261,7 +261,7 @@ COMPACTION_KEYS = ("law", "coefficient", "modulus_pa", "vf0", "exponent",
 
 
 def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
-                        contact_table: dict) -> float:
+                        contact_table: dict, section: str = "contact.compaction") -> float:
     """k' [Pa] of ``[contact] compaction = {law = "glass" | "carbon" | "custom", ...}``: the
     line-contact stiffness with which a hexagonal bundle of the family's virtual fibres
     reaches the law's fibre volume fraction at ``reference_pressure_pa`` (default 100 kPa;
@@ -269,11 +269,10 @@ def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
     from .model.compaction import CARBON_BUNDLE, GLASS_BUNDLE, CompactionLaw, contact_for_yarn
     from .model.fabric_model import family_beads
 
-    section = "contact.compaction"
     if not isinstance(table, dict):
         raise InputError(f"{where}: [{section}] must be a table, got {table!r}")
     _check_keys(table, COMPACTION_KEYS, where, section)
-    if "normal_stiffness_pa" in contact_table:
+    if section == "contact.compaction" and "normal_stiffness_pa" in contact_table:
         raise InputError(f"{where}: [contact] give normal_stiffness_pa or compaction, not "
                          f"both (the law sets the stiffness)")
     kwargs = dict(table)
@@ -424,8 +423,16 @@ def _contact(table: dict, fabric: Fabric, disc: Discretisation, where: str) -> C
     """``[contact]``, its normal stiffness from ``compaction = {...}`` when given."""
     contact_table = dict(table)
     law_table = contact_table.pop("compaction", None)
+    # same-family pairs only (ContactModel "Split contact"): the yarn's compaction law
+    within_table = contact_table.pop("within_family", None)
     _check_keys(contact_table, _fields(ContactModel), where, "contact")
     if law_table is not None:
         contact_table["normal_stiffness_pa"] = _stiffness_from_law(
             where, law_table, fabric, disc, contact_table)
+    if within_table is not None:
+        if "within_family_stiffness_pa" in contact_table:
+            raise InputError(f"{where}: [contact] give within_family_stiffness_pa or "
+                             "within_family, not both (the law sets the stiffness)")
+        contact_table["within_family_stiffness_pa"] = _stiffness_from_law(
+            where, within_table, fabric, disc, contact_table, "contact.within_family")
     return schema.build(ContactModel, contact_table, "contact", where=where)

@@ -75,7 +75,8 @@ def unit(kind: str, si_per_unit: float = 1.0, words: tuple[str, ...] = ()) -> di
     return {"unit": Unit(kind, si_per_unit, words)}
 
 
-_CONTACT = {"normal_stiffness_pa": "pressure", "stiffness_n_per_m": "stiffness"}
+_CONTACT = {"normal_stiffness_pa": "pressure", "within_family_stiffness_pa": "pressure",
+            "stiffness_n_per_m": "stiffness"}
 
 #: class name -> field -> kind (or :class:`Unit`) of the fields that carry a unit
 UNITS: dict[str, dict[str, str | Unit]] = {

@@ -31,6 +31,26 @@ default spacing s/d = 0.5 every bead pair gets exactly the former default
 is far softer across: a compaction law (:mod:`fabmd.model.compaction`) gives k'
 from the yarn's own behaviour.
 
+Split contact (``within_family_stiffness_pa``). A yarn of filaments is soft across,
+but a crossing of two yarns is not a point contact of two filaments: its pressure is
+carried by the whole bundle over a small patch. With one k' for all pairs, a k' as soft
+as the yarn's compaction law lets crossing virtual fibres pass through (20 % overlap at
+100 kPa on the crimped example), and a k' that holds crossings makes yarns as stiff
+across as solid glass (they cannot narrow, the shear locks where the yarn widths meet).
+Atom types are one per yarn family, so the contact can be split per type pair:
+fibres of the same family (within a yarn, and neighbouring parallel yarns: the lateral
+compaction that sets yarn narrowing and shear locking) touch with
+``within_family_stiffness_pa`` (e.g. from a compaction law,
+:func:`fabmd.model.compaction.contact_for_yarn`), fibres of different families
+(warp–weft, binder–others) with ``normal_stiffness_pa`` (default 0.4·E·A/d²). This needs
+``pair_style granular`` with one ``pair_coeff i j`` per type pair (the classic
+``gran/*`` styles take one global set of coefficients), about 2.5× the loop time
+(section "Pair styles"); Hooke only. The time step follows the stiffer of the two.
+Measured (``benchmarks/RESULTS.md``, "Split contact"): with the glass law's k' (secant at
+100 kPa) a yarn of 7 virtual fibres cannot carry a crossing's concentrated load through
+its thickness — crimping the plain-weave example towards 1 cN/tex pushes fibres of one
+yarn through each other (overlap > 0.5 d at −6 %); a linear contact has no packing limit.
+
 Older settings still work and are flagged as discretisation-dependent:
 ``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
 and ``stiffness_n_per_m`` (a fixed k_n per bead pair, ∝ 1/l0 per length).
@@ -140,6 +160,10 @@ class ContactModel:
         overlap_warning: overlap/d above which a run warns, in (0, 1).
         overlap_limit: overlap/d at which a run is stopped as unstable
             (cause "overlap"), in (overlap_warning, 1].
+        within_family_stiffness_pa: k' [Pa] between fibres of the same family (same
+            atom type), > 0 (accepts "230 kPa"); None (default): one contact for all
+            pairs. When given, ``normal_stiffness_pa`` (or its default) applies to pairs
+            of different families only (module docstring, "Split contact"). Hooke only.
     """
 
     friction: float = 0.3
@@ -152,9 +176,20 @@ class ContactModel:
     reference_overlap: float = 0.05
     overlap_warning: float = 0.1
     overlap_limit: float = 0.5
+    within_family_stiffness_pa: float | None = None
 
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
+        if self.within_family_stiffness_pa is not None:
+            object.__setattr__(self, "within_family_stiffness_pa", inputs.positive(
+                "contact.within_family_stiffness_pa",
+                quantity(self.within_family_stiffness_pa, "pressure",
+                         "contact.within_family_stiffness_pa")))
+            if self.normal != "hooke" or not self.per_length:
+                raise InputError(
+                    "contact.within_family_stiffness_pa: needs normal = 'hooke' and the "
+                    "stiffness per unit length (no stiffness_factor / stiffness_n_per_m), "
+                    f"got normal = {self.normal!r}")
         inputs.one_of("contact.normal", self.normal, NORMAL_MODELS)
         if self.normal_stiffness_pa is not None:
             object.__setattr__(self, "normal_stiffness_pa", inputs.positive(
@@ -190,6 +225,8 @@ class ContactModel:
         warning overlap.
         """
         kn = self.normal_stiffness_n_per_m(beads)
+        if self.split:
+            kn = max(kn, self.within_family_stiffness_n_per_m(beads))
         if self.normal == "hertz":
             kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
                                   / self.reference_overlap)
@@ -208,8 +245,38 @@ class ContactModel:
         k = self.pair_coefficients(beads)["kn"] * math.sqrt(d / 4.0)
         return (force_n / k) ** (2.0 / 3.0) / d
 
+    @property
+    def split(self) -> bool:
+        """True when same-family pairs have their own stiffness (module docstring)."""
+        return self.within_family_stiffness_pa is not None
+
+    def within_family_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
+        """k_n per bead pair [N/m] between fibres of one family: k'_within · l0 (widest
+        spacing); the crossing stiffness when the contact is not split."""
+        if not self.split:
+            return self.normal_stiffness_n_per_m(beads)
+        return _normal_stiffness("contact", self.within_family_stiffness_pa, None, None,
+                                 beads)
+
+    def softest_normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
+        """The smallest k_n of any type pair [N/m] (largest overlap per unit force)."""
+        return min(self.normal_stiffness_n_per_m(beads),
+                   self.within_family_stiffness_n_per_m(beads))
+
+    def type_pair_coefficients(self, beads: list[BeadParameters], n_types: int
+                               ) -> list[tuple[int, int, dict[str, float]]]:
+        """``(i, j, coefficients)`` for every atom type pair i <= j of a split contact:
+        i == j (one family) with the within-family stiffness, else the crossing one.
+        Damping is a fraction of critical for each pair's own k_n (lightest bead)."""
+        cross = self.pair_coefficients(beads)
+        within = self._coefficients(self.within_family_stiffness_n_per_m(beads), beads)
+        return [(i, j, within if i == j else cross)
+                for i in range(1, n_types + 1) for j in range(i, n_types + 1)]
+
     def pair_style(self) -> str:
         """The cheapest LAMMPS granular style that carries this physics (measured)."""
+        if self.split:
+            return "granular"  # per-type-pair coefficients
         if self.normal == "hooke" and self.friction == 0.0:
             return "gran/hooke"  # no tangential force: no history to store
         return f"gran/{self.normal}/history"
@@ -223,7 +290,9 @@ class ContactModel:
         overlap of the smallest pair (R_eff = d/4), so that k_n is the secant
         stiffness there.
         """
-        kn = self.normal_stiffness_n_per_m(beads)
+        return self._coefficients(self.normal_stiffness_n_per_m(beads), beads)
+
+    def _coefficients(self, kn: float, beads: list[BeadParameters]) -> dict[str, float]:
         m_eff = 0.5 * min(b.mass_kg for b in beads)
         gamma_n = self.damping_ratio * 2.0 * math.sqrt(kn / m_eff)
         if self.normal == "hertz":

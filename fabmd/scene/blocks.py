@@ -175,6 +175,15 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
     """Fibre–fibre contact, or ``pair_style none`` when the scene needs none."""
     if contact_model is None:
         return render("contact_none")
+    if contact_model.split:  # per type pair: pair_style granular (ContactModel docstring)
+        lines = [f"pair_coeff      {i} {j} hooke {fmt(c['kn'])} {fmt(c['gamman'])} "
+                 f"tangential linear_history {fmt(c['kt'])} "
+                 f"{fmt(c['gammat'] / c['gamman'])} {fmt(c['friction'])} "
+                 "damping mass_velocity"
+                 for i, j, c in contact_model.type_pair_coefficients(
+                     beads, len(model.family_names))]
+        return render("contact_granular_split", friction=contact_model.friction,
+                      pair_coeffs="\n".join(lines))
     c = contact_model.pair_coefficients(beads)
     return render("contact_granular", normal=contact_model.normal,
                   style=contact_model.pair_style(), **c)
@@ -265,8 +274,9 @@ def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
             pair_lines = render("overlap_pair_distance", diameter=d_min)
         else:
             c = contact_model.pair_coefficients(beads)
-            if contact_model.normal == "hooke":
-                formula = f"c_fabmd_contact_fmax/{fmt(c['kn'])}"
+            if contact_model.normal == "hooke":  # split contact: the softer pair bounds it
+                formula = ("c_fabmd_contact_fmax/"
+                           f"{fmt(contact_model.softest_normal_stiffness_n_per_m(beads))}")
                 text = "F/k_n"
             else:  # F = Kn sqrt(R_eff) delta^1.5; the smallest R_eff gives the largest delta
                 root = c["kn"] * math.sqrt(d_min / 4.0)
