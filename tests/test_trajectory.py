@@ -14,9 +14,9 @@ import fabmd.results.universe
 from fabmd import analysis as A
 from fabmd.analysis.synthetic import woven_sheet
 from fabmd.engine import Engine
+from fabmd.engine.lammps_dump import iter_dump
 from fabmd.errors import InputError, UnstableRun
 from fabmd.protocols.fibre_tension import FibreTension
-from fabmd.results.lammps_dump import iter_dump
 from fabmd.results.trajectory import (
     BASE_VERSION,
     FORMAT_VERSION,

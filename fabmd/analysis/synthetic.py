@@ -17,9 +17,9 @@ import math
 import numpy as np
 
 from ..errors import InputError
+from ..geometry.material import GLASS, FibreMaterial, VirtualFibre
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, bead_parameters
-from ..model.material import GLASS, FibreMaterial, VirtualFibre
 
 
 def crossing_amplitude(fibres_through: int, pitch_m: float, diameter_m: float,

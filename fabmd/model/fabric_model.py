@@ -31,10 +31,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..geometry.fabric import FAMILY_AXIS, Fabric
+from ..geometry.material import VirtualFibre
 from ..geometry.paths import YarnPath, fibre_beads
 from .bead_model import AngleType, BeadModel, BondType, Yarn
 from .beads import BeadParameters, Discretisation, bead_parameters
-from .material import VirtualFibre
 from .overlap import ClosestApproach, closest_approach
 
 #: rest lengths closer than this relative difference share a bond type
@@ -394,7 +394,7 @@ def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBead
     if cell_keys is None:
         cell_keys = fabric.cell_spec_keys()
     table = fabric.yarn_spec_table()
-    from ..protocols.common import scene_dict
+    from ..describe import scene_dict
 
     arch = fabric.architecture
     if fabric.is_3d:
