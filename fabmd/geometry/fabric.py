@@ -23,8 +23,6 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from .. import inputs
 from ..errors import InputError
 from ..units import TEX, quantity
@@ -32,6 +30,7 @@ from .architecture3d import Architecture3D
 from .overrides import YarnOverride
 from .paths import YarnPath
 from .section import section_height
+from .unit_cell import layered_cell, layered_levels, woven_cell
 from .weave import Weave
 from .yarn_spec import (  # noqa: F401 - YarnSpec and its limits, also by this module's name
     AREAL_DENSITY_TOLERANCE,
@@ -404,30 +403,7 @@ class Fabric:
         if not self.is_3d:
             half = 0.25 * (self.warp.height_m + self.weft.height_m) + 0.5 * c
             return {"crossing_half_separation": [half]}
-        a = self.architecture
-        binder_gaps = a.binder_gaps()
-        table = self.yarn_spec_table()
-        binder_h = max(s.height_m for s in self._family_specs("binder"))
-        heights = []
-        for g in range(a.n_gaps):
-            h = 0.0
-            if g in a.warp_gaps:  # the tallest stuffer of the gap, over the dents
-                h = max(h, max(table[self._spec_key("warp", d, g)].height_m
-                               for d in range(1, a.dents + 1)))
-            if g in binder_gaps:
-                h = max(h, binder_h)
-            heights.append(h)
-        # each weft layer as high as its tallest weft
-        hfs = [max(table[self._spec_key("weft", col, k)].height_m
-                   for col in range(1, a.columns + 1)) for k in range(1, a.weft_layers + 1)]
-        gap_z = [0.0]
-        weft_z = []
-        for k in range(a.weft_layers):
-            weft_z.append(gap_z[k] - 0.5 * (heights[k] + hfs[k]) - c)
-            gap_z.append(weft_z[k] - 0.5 * (heights[k + 1] + hfs[k]) - c)
-        mid = 0.5 * (gap_z[0] + gap_z[-1])
-        return {"weft": [z - mid for z in weft_z], "gap": [z - mid for z in gap_z],
-                "gap_height": heights}
+        return layered_levels(self, c)
 
     def unit_cell_paths(self) -> list[YarnPath]:
         """Centrelines of the yarns of one unit cell (length = one period)."""
@@ -435,60 +411,7 @@ class Fabric:
 
     def _unit_cell(self) -> tuple[list[YarnPath], list[str]]:
         """Unit-cell centrelines and the yarn spec key of each."""
-        lx, ly = self.unit_cell_m
-        f = self.plateau
-        table = self.yarn_spec_table()
-        out: list[YarnPath] = []
-        keys: list[str] = []
-        if not self.is_3d:
-            m = self.architecture.array
-            c = self.clearance_m + self.lift_m
-            warp_keys = [self._spec_key("warp", i + 1, None) for i in range(m.shape[0])]
-            weft_keys = [self._spec_key("weft", j + 1, None) for j in range(m.shape[1])]
-            hw = np.array([table[k].height_m for k in warp_keys])
-            hf = np.array([table[k].height_m for k in weft_keys])
-            # each crossing as far apart as its two yarns need
-            half = 0.25 * (hw[:, None] + hf[None, :]) + 0.5 * c
-            ww = np.array([table[k].width_m for k in warp_keys])
-            wf = np.array([table[k].width_m for k in weft_keys])
-            sx, sy = self.weft.spacing_m, self.warp.spacing_m
-            weft_u = (np.arange(m.shape[1]) + 0.5) * sx
-            warp_u = (np.arange(m.shape[0]) + 0.5) * sy
-            for i in range(m.shape[0]):
-                out.append(YarnPath(f"warp-{i + 1}", "warp", 0, warp_u[i], lx, lx,
-                                    tuple(weft_u), tuple(np.where(m[i] == 1, half[i], -half[i])),
-                                    tuple(f * 0.5 * wf)))
-                keys.append(warp_keys[i])
-            for j in range(m.shape[1]):
-                out.append(YarnPath(f"weft-{j + 1}", "weft", 1, weft_u[j], ly, ly,
-                                    tuple(warp_u),
-                                    tuple(np.where(m[:, j] == 1, -half[:, j], half[:, j])),
-                                    tuple(f * 0.5 * ww)))
-                keys.append(weft_keys[j])
-        else:
-            a = self.architecture
-            lev = self.levels()
-            sx, p = self.weft.spacing_m, self.warp.spacing_m
-            cols = (np.arange(a.columns) + 0.5) * sx
-            for d in range(a.dents):
-                for g in a.warp_gaps:
-                    out.append(YarnPath(f"warp-d{d + 1}-g{g}", "warp", 0, (d + 0.25) * p,
-                                        lx, lx, z_m=lev["gap"][g], level=g))
-                    keys.append(self._spec_key("warp", d + 1, g))
-            for c in range(a.columns):
-                for k in range(a.weft_layers):
-                    out.append(YarnPath(f"weft-c{c + 1}-l{k + 1}", "weft", 1, cols[c], ly, ly,
-                                        z_m=lev["weft"][k], level=k))
-                    keys.append(self._spec_key("weft", c + 1, k + 1))
-            for d, dent in enumerate(a.binder_paths):
-                for b, path in enumerate(dent):
-                    y = (d + 0.75) * p if not a.separate_binders else \
-                        (d + 0.25 + (b + 1) * self.binder_pitch_m() / p) * p
-                    out.append(YarnPath(f"binder-d{d + 1}-{b + 1}", "binder", 0,
-                                        y, lx, lx, tuple(cols),
-                                        tuple(lev["gap"][g] for g in path),
-                                        (f * 0.5 * self.weft.width_m,), level=min(path)))
-                    keys.append(self._spec_key("binder", d + 1, None))
+        out, keys = woven_cell(self) if not self.is_3d else layered_cell(self)
         paths = [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,
                           y.node_u_m, y.node_z_m, y.plateau_m, y.z_m, y.level, k)
                  for k, y in enumerate(out)]
