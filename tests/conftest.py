@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import subprocess
@@ -11,6 +12,25 @@ from pathlib import Path
 import pytest
 
 BIN = Path(sys.executable).parent
+
+
+@functools.cache
+def lammps_missing() -> str:
+    """Why LAMMPS cannot be used here ("" when it can)."""
+    from fabmd.engine.library import lammps_class
+    from fabmd.errors import EngineUnavailable
+
+    try:
+        lammps_class()
+    except EngineUnavailable as exc:
+        return str(exc)
+    return ""
+
+
+def pytest_runtest_setup(item):
+    # tests that start LAMMPS say so with the mark; without LAMMPS they skip, saying why
+    if item.get_closest_marker("lammps") is not None and lammps_missing():
+        pytest.skip(f"LAMMPS is not available: {lammps_missing()}")
 
 
 def fabmd_command() -> list[str]:

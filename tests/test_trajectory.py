@@ -405,6 +405,7 @@ def _assert_same_trajectory(a, b):
             assert np.array_equal(cb[name], value), name
 
 
+@pytest.mark.lammps
 @pytest.mark.mpi
 def test_two_mpi_ranks_write_the_trajectory_once_and_alike(tmp_path, mpirun):
     one = run_cli("validate", "fibre-tension", *TINY, "--out", str(tmp_path / "one"))
