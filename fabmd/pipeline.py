@@ -73,11 +73,6 @@ TESTS: dict[str, TestKind] = {
 }
 
 
-def register_test(name: str, kind: TestKind) -> None:
-    """Add a test to the pipeline (protocol modules call this)."""
-    TESTS[name] = kind
-
-
 def section(name: str) -> str:
     """Scene-file table of a test: ``picture-frame`` -> ``picture_frame``."""
     return name.replace("-", "_")

@@ -65,8 +65,6 @@ PRESETS: dict[str, Preset] = {
 #: tests whose scene tables take a speed_fraction
 DRIVEN_TABLES = ("tension", "picture_frame", "bias_extension", "periodic_tension",
                  "periodic_shear", "drape")
-#: the default speed_fraction of each driven test, when the scene gives none
-DEFAULT_SPEEDS = {"tension": 1e-4}
 
 
 def resolution(n_fibres: int, spacing_ratio: float) -> float:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import subprocess
@@ -15,6 +16,25 @@ BIN = Path(sys.executable).parent
 # one rank per command unless a test asks for more: the suite's pytest-xdist workers
 # already fill the cores (fabmd.engine.ranks would otherwise give each command all of them)
 os.environ.setdefault("FABMD_NP", "1")
+
+
+@functools.cache
+def lammps_missing() -> str:
+    """Why LAMMPS cannot be used here ("" when it can)."""
+    from fabmd.engine.library import lammps_class
+    from fabmd.errors import EngineUnavailable
+
+    try:
+        lammps_class()
+    except EngineUnavailable as exc:
+        return str(exc)
+    return ""
+
+
+def pytest_runtest_setup(item):
+    # tests that start LAMMPS say so with the mark; without LAMMPS they skip, saying why
+    if item.get_closest_marker("lammps") is not None and lammps_missing():
+        pytest.skip(f"LAMMPS is not available: {lammps_missing()}")
 
 
 def fabmd_command() -> list[str]:

@@ -134,6 +134,7 @@ def _cantilever_deflection(factor: float, tmp_path) -> tuple[float, float]:
     return deflection, force * length**3 / (3.0 * ei)
 
 
+@pytest.mark.lammps
 def test_stiff_links_make_the_yarn_bend_as_a_composite_beam(tmp_path):
     deflection, beam = _cantilever_deflection(1.0, tmp_path / "stiff")
     assert deflection == pytest.approx(beam, rel=0.03)
@@ -150,6 +151,7 @@ def test_the_bias_coupon_of_the_pipeline_links_its_yarns():
     assert "cohesion_factor" not in TESTS["tension"].coupon
 
 
+@pytest.mark.lammps
 def test_coupon_links_after_its_free_relaxation_and_at_rest_there(tmp_path):
     # two yarns of three touching fibres, a little stretched: cut, they spring back first
     result = _linked_coupon(tmp_path)
@@ -177,6 +179,7 @@ def _linked_coupon(tmp_path):
     return coupon.run(fabric, tmp_path / "coupon", engine=Engine(progress=False))
 
 
+@pytest.mark.lammps
 @pytest.mark.mpi
 def test_a_linked_coupon_gives_the_same_tension_on_two_mpi_ranks(tmp_path, mpirun):
     """The links reach further than a fibre bond: the ghost cutoff must cover them."""
@@ -193,6 +196,7 @@ def test_a_linked_coupon_gives_the_same_tension_on_two_mpi_ranks(tmp_path, mpiru
     assert f2 == pytest.approx(f1, rel=1e-6)
 
 
+@pytest.mark.lammps
 def test_cohesion_on_yarns_of_one_fibre_warns(tmp_path):
     from fabmd.protocols.coupon import Coupon
 

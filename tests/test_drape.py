@@ -153,6 +153,7 @@ def small_blank(tmp_path_factory):
     return cut(tile(crimped.model, 7, 7, periodic=False), 26e-3, 26e-3)
 
 
+@pytest.mark.lammps
 def test_quarter_blank_holds_the_cut_fibre_ends_on_the_symmetry_planes(small_blank):
     drape = Drape(**SMALL)
     quarter = drape.prepare(small_blank)
@@ -177,6 +178,7 @@ def test_quarter_blank_holds_the_cut_fibre_ends_on_the_symmetry_planes(small_bla
         assert line in text
 
 
+@pytest.mark.lammps
 def test_tool_zones_skip_only_beads_that_cannot_reach_the_tools(small_blank):
     near = Drape(**SMALL)
     model = near.prepare(small_blank)

@@ -47,7 +47,7 @@ def run_block(code: str, namespace: dict | None = None,
 
 KNOWN = ("from fabmd.scenefile import load_scene", "FibreTension(", "fabmd.load(\"runs/crimp\")",
          "from ovito", "ContactModel(friction=0.3)", "PictureFrame(", "Drape(",
-         'mda.Universe("model.data", "trajectory.h5"')
+         'mda.Universe("model.data", "trajectory.h5"', "fabmd.load_scene(")
 
 
 def test_every_python_block_of_the_readme_is_run_here():
@@ -60,6 +60,29 @@ def test_describing_a_fabric(monkeypatch):
     monkeypatch.chdir(ROOT)  # the block reads examples/plain_weave.toml
     ns = run_block(block(KNOWN[0]))
     assert ns["model"].n_beads > 0
+
+
+def test_python_quick_start_uses_the_public_api(monkeypatch, tmp_path):
+    """The quick start's names are fabmd's; its run and load are stood in for (the
+    pipeline and ``fabmd.load`` have their own tests), the arguments are checked."""
+    import fabmd
+
+    monkeypatch.chdir(ROOT)  # the block reads examples/plain_weave.toml
+    calls = []
+
+    def run_test(scene, test, out, engine=None):
+        calls.append((scene, test, out, engine))
+        return {"results": str(tmp_path / "t" / "tension")}
+
+    monkeypatch.setattr(fabmd, "run_test", run_test)
+    monkeypatch.setattr(fabmd, "load", lambda path: calls.append(path) or "universe")
+    ns = run_block(block("fabmd.load_scene("))
+    scene, test, out, engine = calls[0]
+    assert isinstance(scene, fabmd.Scene) and isinstance(engine, fabmd.Engine)
+    assert (test, out) == ("tension", "runs/t")
+    assert calls[1] == str(tmp_path / "t" / "tension") and ns["u"] == "universe"
+    assert set(fabmd.__all__) >= {"Scene", "load_scene", "run_test", "Engine", "load",
+                                  "InputError", "OverlapWarning", "QuasiStaticWarning"}
 
 
 @pytest.mark.lammps

@@ -14,9 +14,9 @@ import fabmd.results.universe
 from fabmd import analysis as A
 from fabmd.analysis.synthetic import woven_sheet
 from fabmd.engine import Engine
+from fabmd.engine.lammps_dump import iter_dump
 from fabmd.errors import InputError, UnstableRun
 from fabmd.protocols.fibre_tension import FibreTension
-from fabmd.results.lammps_dump import iter_dump
 from fabmd.results.trajectory import (
     BASE_VERSION,
     FORMAT_VERSION,
@@ -405,6 +405,7 @@ def _assert_same_trajectory(a, b):
             assert np.array_equal(cb[name], value), name
 
 
+@pytest.mark.lammps
 @pytest.mark.mpi
 def test_two_mpi_ranks_write_the_trajectory_once_and_alike(tmp_path, mpirun):
     one = run_cli("validate", "fibre-tension", *TINY, "--out", str(tmp_path / "one"))

@@ -56,8 +56,8 @@ class Field:
 
     def figure(self, **kwargs):
         """A matplotlib figure of the field with units on the axes and colour bar
-        (keyword arguments go to :func:`fabmd.results.plots.field_figure`)."""
-        from ..results.plots import field_figure
+        (keyword arguments go to :func:`fabmd.analysis.fieldplot.field_figure`)."""
+        from .fieldplot import field_figure
 
         kwargs.setdefault("symmetric", self.unit == "°" and "shear" in self.name)
         return field_figure(self.x_edges_m, self.y_edges_m, self.values, self.label, **kwargs)

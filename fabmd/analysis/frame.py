@@ -93,7 +93,7 @@ class FabricFrame:
     @classmethod
     def from_trajectory(cls, path: Path, frame: int = -1) -> FabricFrame:
         """Frame ``frame`` of a ``trajectory.h5`` (or of a run folder's)."""
-        from ..results.trajectory import open_trajectory, read_model, read_tilt, trajectory_path
+        from .trajectory_file import open_trajectory, read_model, read_tilt, trajectory_path
 
         path = trajectory_path(path)
         with open_trajectory(path) as f:
@@ -106,7 +106,7 @@ class FabricFrame:
     def iter_trajectory(cls, path: Path) -> Iterator[FabricFrame]:
         """Every frame of a ``trajectory.h5`` (or of a run folder's), in order; the
         identity is read once, then one frame's positions and box at a time."""
-        from ..results.trajectory import open_trajectory, read_lengths, trajectory_path
+        from .trajectory_file import open_trajectory, read_lengths, trajectory_path
 
         path = trajectory_path(path)
         base = cls.from_trajectory(path, 0)

@@ -17,9 +17,9 @@ import math
 import numpy as np
 
 from ..errors import InputError
+from ..geometry.material import GLASS, FibreMaterial, VirtualFibre
 from ..model.bead_model import BeadModel, BondType, Yarn
 from ..model.beads import Discretisation, bead_parameters
-from ..model.material import GLASS, FibreMaterial, VirtualFibre
 
 
 def crossing_amplitude(fibres_through: int, pitch_m: float, diameter_m: float,
@@ -36,6 +36,25 @@ def _even_arc_stations(amp: float, s: float, length: float, n: int, closed: bool
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(z)))])
     targets = np.arange(n if closed else n + 1) * (arc[-1] / n)
     return np.interp(targets, arc, x)
+
+
+def _check_sheet(warp_yarns: int, weft_yarns: int, spacing_m: float, fibres, d: float,
+                 pitch: float, shear_deg: float, periodic: bool) -> tuple[int, int]:
+    """Fibres across and through a yarn, after checking that the sheet can be built."""
+    nw, nh = (int(f) for f in fibres)
+    if nw < 1 or nh < 1:
+        raise InputError(f"woven_sheet.fibres must be two integers >= 1, got {fibres}")
+    if periodic and (warp_yarns % 2 or weft_yarns % 2):
+        raise InputError("a periodic plain weave needs even numbers of warp and weft yarns, "
+                         f"got {warp_yarns} and {weft_yarns}")
+    if periodic and shear_deg:
+        raise InputError("woven_sheet.shear_deg needs periodic=False (the box would be "
+                         "triclinic)")
+    p = pitch * d
+    if (nw - 1) * p + d >= spacing_m:
+        raise InputError(f"yarns of {nw} fibres across ({(nw - 1) * p + d:g} m wide) do not "
+                         f"fit a spacing of {spacing_m:g} m")
+    return nw, nh
 
 
 def woven_sheet(warp_yarns: int = 2, weft_yarns: int = 2, spacing_m: float = 2e-3,
@@ -59,20 +78,10 @@ def woven_sheet(warp_yarns: int = 2, weft_yarns: int = 2, spacing_m: float = 2e-
         periodic: close every fibre across a periodic x-y box.
         material: fibre material.
     """
-    nw, nh = (int(f) for f in fibres)
-    if nw < 1 or nh < 1:
-        raise InputError(f"woven_sheet.fibres must be two integers >= 1, got {fibres}")
-    if periodic and (warp_yarns % 2 or weft_yarns % 2):
-        raise InputError("a periodic plain weave needs even numbers of warp and weft yarns, "
-                         f"got {warp_yarns} and {weft_yarns}")
-    if periodic and shear_deg:
-        raise InputError("woven_sheet.shear_deg needs periodic=False (the box would be "
-                         "triclinic)")
+    nw, nh = _check_sheet(warp_yarns, weft_yarns, spacing_m, fibres, fibre_diameter_m, pitch,
+                          shear_deg, periodic)
     d = fibre_diameter_m
     p = pitch * d
-    if (nw - 1) * p + d >= spacing_m:
-        raise InputError(f"yarns of {nw} fibres across ({(nw - 1) * p + d:g} m wide) do not "
-                         f"fit a spacing of {spacing_m:g} m")
     amp = crossing_amplitude(nh, p, d, clearance) if amplitude_m is None else amplitude_m
     fibre = VirtualFibre.solid(material, d)
     s = spacing_m
@@ -92,31 +101,26 @@ def woven_sheet(warp_yarns: int = 2, weft_yarns: int = 2, spacing_m: float = 2e-
             yarns.append(Yarn(f"{fam}-{j}", fam))
             centre = (j + 0.5) * s
             zc = sign * amp * (-1) ** j * np.cos(math.pi * (along - 0.5 * s) / s)
-            for a in range(nw):
-                for c in range(nh):
-                    across = centre + (a - 0.5 * (nw - 1)) * p
-                    z = zc + (c - 0.5 * (nh - 1)) * p
-                    m = len(along)
-                    xyz = (np.column_stack([along, np.full(m, across), z]) if fam == "warp"
-                           else np.column_stack([np.full(m, across), along, z]))
-                    pos.append(xyz)
-                    fibre_yarn.append(len(yarns))
-                    fib += [len(fibre_yarn)] * m
-                    types += [t] * m
-                    bonds += [(k + i, k + i + 1) for i in range(m - 1)]
-                    if periodic:
-                        bonds.append((k + m - 1, k))
-                    btypes += [t] * (m if periodic else m - 1)
-                    k += m
+            for xyz in _fibre_lines(fam, along, centre, zc, nw, nh, p):
+                m = len(along)
+                pos.append(xyz)
+                fibre_yarn.append(len(yarns))
+                fib += [len(fibre_yarn)] * m
+                types += [t] * m
+                bonds += [(k + i, k + i + 1) for i in range(m - 1)]
+                if periodic:
+                    bonds.append((k + m - 1, k))
+                btypes += [t] * (m if periodic else m - 1)
+                k += m
     pos = np.vstack(pos)
     if shear_deg:
         g = math.radians(shear_deg)
         pos = np.column_stack([pos[:, 0] + pos[:, 1] * math.sin(g), pos[:, 1] * math.cos(g),
                                pos[:, 2]])
+    # z: room for the crossings and a few diameters; x, y: the period or 2 d of margin
     zpad = amp + nh * p + 4 * d
     if periodic:
-        lo = np.array([0.0, 0.0, -zpad])
-        hi = np.array([lengths["warp"], lengths["weft"], zpad])
+        lo, hi = np.array([0.0, 0.0, -zpad]), np.array([lengths["warp"], lengths["weft"], zpad])
     else:
         lo = np.array([*(pos[:, :2].min(axis=0) - 2 * d), -zpad])
         hi = np.array([*(pos[:, :2].max(axis=0) + 2 * d), zpad])
@@ -125,12 +129,7 @@ def woven_sheet(warp_yarns: int = 2, weft_yarns: int = 2, spacing_m: float = 2e-
         bond_types=btypes, family_names=("warp", "weft"), bond_type_table=table,
         fibre_yarn=fibre_yarn, yarns=yarns, box_lo=lo, box_hi=hi,
         periodic=(periodic, periodic, False))
-    # rest length = mean bond length of the family: the sheet starts (nearly) unstressed
-    blen = model.bond_lengths()
-    model.bond_type_table = [
-        BondType(bt.coefficient * bt.rest_length_m / blen[model.bond_types == i].mean(),
-                 float(blen[model.bond_types == i].mean()), bt.family, bt.axial_stiffness_n)
-        for i, bt in enumerate(table, start=1)]
+    model.bond_type_table = _unstressed_types(model, table)
     model.masses = np.full(model.n_beads, bead_parameters(
         fibre, Discretisation(spacing_ratio=spacing_ratio)).mass_kg)
     model.info = {"synthetic": "woven_sheet", "spacing_m": s, "amplitude_m": amp,
@@ -154,3 +153,25 @@ def sinusoid_curvature(amplitude_m: float, wavelength_m: float, x) -> np.ndarray
     x = np.asarray(x, float)
     return (amplitude_m * k * k * np.abs(np.cos(k * x))
             / (1.0 + (amplitude_m * k * np.sin(k * x)) ** 2) ** 1.5)
+
+
+def _fibre_lines(fam: str, along: np.ndarray, centre: float, zc: np.ndarray, nw: int, nh: int,
+                 p: float):
+    """Bead positions (k, 3) [m] of the ``nw`` × ``nh`` fibres of one yarn, ``p`` apart
+    around its centreline (``along`` the yarn axis, at ``centre`` across, height ``zc``)."""
+    m = len(along)
+    for a in range(nw):
+        for c in range(nh):
+            across = centre + (a - 0.5 * (nw - 1)) * p
+            z = zc + (c - 0.5 * (nh - 1)) * p
+            yield (np.column_stack([along, np.full(m, across), z]) if fam == "warp"
+                   else np.column_stack([np.full(m, across), along, z]))
+
+
+def _unstressed_types(model: BeadModel, table: list[BondType]) -> list[BondType]:
+    """Rest length = mean bond length of the family (same E·A): the sheet starts (nearly)
+    unstressed."""
+    blen = model.bond_lengths()
+    return [BondType(bt.coefficient * bt.rest_length_m / blen[model.bond_types == i].mean(),
+                     float(blen[model.bond_types == i].mean()), bt.family, bt.axial_stiffness_n)
+            for i, bt in enumerate(table, start=1)]

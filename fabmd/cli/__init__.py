@@ -24,11 +24,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-def register(name: str, module: str, help_text: str) -> None:
-    """Add a subcommand (used by the modules of this package)."""
-    COMMANDS[name] = (module, help_text)
-
-
 def _chosen(argv: list[str]) -> str | None:
     for word in argv:
         if not word.startswith("-"):

@@ -1,5 +1,5 @@
 """The LAMMPS engine: load the library, run an input in-process or as a run folder."""
 
-from .runner import Engine, EngineResult, make_engine
+from .runner import Engine, EngineResult
 
-__all__ = ["Engine", "EngineResult", "make_engine"]
+__all__ = ["Engine", "EngineResult"]

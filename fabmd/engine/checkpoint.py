@@ -44,7 +44,7 @@ STATE_COMMANDS = {
     "write_restart", "read_restart", "mass", "run", "minimize",
 }
 _FILE_KEYWORD = re.compile(r"\b(file)\s+(\S+)")
-#: dump styles whose files :func:`fabmd.results.lammps_dump.truncate_dump` can cut back
+#: dump styles whose files :func:`fabmd.engine.lammps_dump.truncate_dump` can cut back
 _CUT_DUMP_STYLES = ("custom", "atom", "local")
 #: what a dump file written before the checkpoint is called while the resumed run writes
 BEFORE_RESUME = ".before-resume"
@@ -137,7 +137,7 @@ def cut_outputs(run_dir: Path, commands: list[str], step: int) -> None:
     resumed run prints again at ``step`` is dropped by the readers), and the files of the
     dumps still open back to their frames before ``step``, set aside for
     :func:`join_dump_parts` (the resumed run writes the dump file anew)."""
-    from ..results.lammps_dump import truncate_dump
+    from .lammps_dump import truncate_dump
 
     join_dump_parts(run_dir, commands)  # of a resumed run that was stopped hard
     for name in open_dumps(commands).values():

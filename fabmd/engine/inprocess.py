@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -278,10 +277,3 @@ def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: in
                                 history_fixes(lmp))
         state.save(run_dir)
     mpi.barrier()
-
-
-def timed_run_inprocess(run_dir: Path, input_name: str, **kwargs) -> tuple[int, float]:
-    """:func:`run_inprocess` and its wall time [s]."""
-    t0 = time.perf_counter()
-    steps = run_inprocess(run_dir, input_name, **kwargs)
-    return steps, time.perf_counter() - t0

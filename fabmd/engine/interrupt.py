@@ -25,6 +25,8 @@ SIGNALS = (signal.SIGTERM, signal.SIGINT)
 
 #: what a re-launched command's parent sends for a SIGTERM (see the module docstring)
 FORWARDED_SIGTERM = signal.SIGUSR1
+#: set in the ranks' environment of a re-launched command (fabmd.engine.relaunch)
+RELAUNCHED_VARIABLE = "FABMD_RELAUNCHED"
 
 _received: list[int] = []  # signal numbers received while catching
 _depth = 0  # nesting of catching() (the pipeline around the engine's runs)
@@ -38,8 +40,6 @@ def _handler(signum, frame) -> None:
 
 def _signals() -> tuple:
     """The signals caught: SIGTERM and SIGINT, and in a re-launched command SIGUSR1."""
-    from .relaunch import RELAUNCHED_VARIABLE
-
     relaunched = os.environ.get(RELAUNCHED_VARIABLE) == "1"
     return SIGNALS + ((FORWARDED_SIGTERM,) if relaunched else ())
 

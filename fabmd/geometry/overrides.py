@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InputError
+from .yarn_spec import YarnSpec
 
 #: families an override may name, and whether it may select by layer
 OVERRIDE_LAYERS = {"warp": True, "weft": True, "binder": False}
@@ -55,8 +56,6 @@ class YarnOverride:
     layers: tuple = ()
 
     def __post_init__(self):
-        from .fabric import YarnSpec  # fabric imports this module
-
         if self.family not in OVERRIDE_LAYERS:
             raise InputError(f"yarn override family must be one of "
                              f"{', '.join(OVERRIDE_LAYERS)}, got {self.family!r}")

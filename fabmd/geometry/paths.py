@@ -170,6 +170,25 @@ class FibreBeads:
     spacing_m: float
 
 
+def _chord_arc(along: np.ndarray, height: np.ndarray, spacing_m: float,
+               periodic: bool) -> np.ndarray:
+    """Arc length [m] from the first grid point of a fibre's line (``along``, ``height``
+    [m]), corrected for curvature so that it measures chords of ``spacing_m``:
+    chord = arc·(1 − κ²l²/24)."""
+    da, dz = np.diff(along), np.diff(height)
+    ds = np.hypot(da, dz)
+    theta = np.unwrap(np.arctan2(dz, da))
+    if periodic:
+        turn = np.diff(np.concatenate([theta[-1:], theta, theta[:1]]))
+        mean_ds = 0.5 * (np.concatenate([ds[-1:], ds]) + np.concatenate([ds, ds[:1]]))
+    else:
+        turn = np.concatenate([[0.0], np.diff(theta), [0.0]])
+        mean_ds = 0.5 * (np.concatenate([ds[:1], ds]) + np.concatenate([ds, ds[-1:]]))
+    kappa_node = np.abs(turn) / mean_ds
+    kappa = 0.5 * (kappa_node[:-1] + kappa_node[1:])
+    return np.concatenate([[0.0], np.cumsum(ds * (1.0 - kappa**2 * spacing_m**2 / 24.0))])
+
+
 def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
                 periodic: bool) -> list[FibreBeads]:
     """Beads along every fibre of a yarn.
@@ -197,20 +216,7 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
     nx, nz = -slope / norm, 1.0 / norm  # in-plane normal (along, z)
     out = []
     for across, through in offsets:
-        along = u + through * nx
-        height = z + through * nz
-        da, dz = np.diff(along), np.diff(height)
-        ds = np.hypot(da, dz)
-        theta = np.unwrap(np.arctan2(dz, da))
-        if periodic:
-            turn = np.diff(np.concatenate([theta[-1:], theta, theta[:1]]))
-            mean_ds = 0.5 * (np.concatenate([ds[-1:], ds]) + np.concatenate([ds, ds[:1]]))
-        else:
-            turn = np.concatenate([[0.0], np.diff(theta), [0.0]])
-            mean_ds = 0.5 * (np.concatenate([ds[:1], ds]) + np.concatenate([ds, ds[-1:]]))
-        kappa_node = np.abs(turn) / mean_ds
-        kappa = 0.5 * (kappa_node[:-1] + kappa_node[1:])
-        sigma = np.concatenate([[0.0], np.cumsum(ds * (1.0 - kappa**2 * spacing_m**2 / 24.0))])
+        sigma = _chord_arc(u + through * nx, z + through * nz, spacing_m, periodic)
         total = sigma[-1]
         if periodic:
             n_beads = max(3, int(round(total / spacing_m)))

@@ -32,7 +32,7 @@ outline. Neighbouring fibres then touch and the outer ones touch the yarn
 boundary: for a circle of diameter D this is
 d = D/3 for 7 fibres, D/5 for 19, D/7 for 37, D/9 for 61. The mechanical
 (filament) area of each fibre comes from the linear density, not from d (see
-:meth:`fabmd.model.material.VirtualFibre.from_yarn`).
+:meth:`fabmd.geometry.material.VirtualFibre.from_yarn`).
 """
 
 from __future__ import annotations

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .lammps_data import read_data, write_data
 
 MODEL_FORMAT = "fabmd-bead-model"
 MODEL_FORMAT_VERSION = 1
@@ -238,8 +239,6 @@ class BeadModel:
 
     def save(self, folder: Path, stem: str = "model") -> tuple[Path, Path]:
         """Write ``<stem>.data`` (LAMMPS) and ``<stem>.json`` (metadata) into ``folder``."""
-        from .lammps_data import write_data
-
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         data = folder / f"{stem}.data"
@@ -251,8 +250,6 @@ class BeadModel:
     @classmethod
     def load(cls, data_path: Path, metadata_path: Path | None = None) -> BeadModel:
         """Read a model back from a LAMMPS data file (ours or ``write_data``'s) + metadata."""
-        from .lammps_data import read_data
-
         data_path = Path(data_path)
         if metadata_path is None:
             metadata_path = data_path.with_suffix(".json")
@@ -260,4 +257,22 @@ class BeadModel:
         if meta.get("format") != MODEL_FORMAT or meta.get("version", 0) > MODEL_FORMAT_VERSION:
             raise InputError(f"{metadata_path} is not a fabmd bead model metadata file "
                              f"(format {meta.get('format')!r}, version {meta.get('version')})")
-        return read_data(data_path, meta)
+        return cls(
+            **read_data(data_path),
+            family_names=tuple(meta["families"]),
+            bond_type_table=[BondType(**bt) for bt in meta["bond_types"]],
+            fibre_yarn=np.asarray(meta["fibre_yarn"], np.int64),
+            yarns=[Yarn(**y) for y in meta["yarns"]],
+            periodic=tuple(meta.get("periodic", (False,) * 3)),
+            angle_type_table=[_angle_type(a) for a in meta.get("angle_types", [])],
+            info=meta.get("info", {}),
+        )
+
+
+def _angle_type(entry: dict) -> AngleType:
+    """An angle type from ``model.json`` (files with a bent rest shape are refused)."""
+    if entry.get("rest_angle_deg") not in (None, 180.0):
+        raise InputError("this model was saved by an older fabmd with a bent rest shape for "
+                         "its bending terms, which is no longer supported "
+                         "(fabmd.model.bending); cut the coupon again")
+    return AngleType(entry["coefficient"], entry["family"])

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import inputs
 from ..errors import InputError
-from .material import VirtualFibre
+from ..geometry.material import VirtualFibre
 
 #: contacts per bead assumed in the stability bound (hexagonal packing)
 STABILITY_CONTACTS = 6

@@ -30,18 +30,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..geometry.fabric import FAMILY_AXIS, Fabric
+from ..geometry.fabric import Fabric
+from ..geometry.material import VirtualFibre
 from ..geometry.paths import YarnPath, fibre_beads
 from .bead_model import AngleType, BeadModel, BondType, Yarn
 from .beads import BeadParameters, Discretisation, bead_parameters
-from .material import VirtualFibre
+from .fabric_info import INFO_FORMAT, fabric_info  # noqa: F401 - also by this name
 from .overlap import ClosestApproach, closest_approach
 
 #: rest lengths closer than this relative difference share a bond type
 REST_LENGTH_TOLERANCE = 1e-9
 #: a yarn folds when curvature × largest fibre offset reaches this
 FOLD_LIMIT = 0.95
-INFO_FORMAT = "fabmd-fabric"
 
 
 @dataclass(frozen=True)
@@ -218,8 +218,34 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
     cell_keys = fabric.cell_spec_keys()
     _check_folding(paths, fams, cell_keys)
     periodic = fabric.periodic
+    per_yarn = _fibre_shapes(paths, fams, cell_keys, periodic)
+    type_table, type_params = _bond_types(fams, families, paths, per_yarn, cell_keys, disc)
+    beads = _place_beads(paths, per_yarn, families, cell_keys, type_table, type_params)
+    pos, diam, fibre_ids, fibre_type = beads["positions"], beads["diameters"], \
+        beads["fibre_ids"], beads.pop("fibre_type")
+    links = _links(fibre_ids, fibre_type, beads.pop("counts"), periodic, disc, type_params,
+                   type_table)
+    # box, wrapping and image flags
+    r = 0.5 * diam
+    z_lo, z_hi = float((pos[:, 2] - r).min()), float((pos[:, 2] + r).max())
+    thickness = z_hi - z_lo
+    box = _box(np.array(fabric.size_m), pos, r, (z_lo, z_hi), periodic, pad_fraction)
+    model = BeadModel(**beads, **links, **box, family_names=families,
+                      bond_type_table=type_table, periodic=(periodic, periodic, False))
 
-    # fibres of each distinct unit-cell yarn, computed once and moved sideways
+    approach = None
+    if check:
+        approach = check_overlaps(model, fabric)
+    model.info = fabric_info(fabric, disc, fams, paths, model, approach, thickness,
+                             (z_lo, z_hi), cell_keys)
+    model.info["build_s"] = time.perf_counter() - t0
+    return model
+
+
+def _fibre_shapes(paths: list[YarnPath], fams: dict[str, FamilyBeads], cell_keys: list[str],
+                  periodic: bool) -> list[list]:
+    """The fibres of every yarn (in ``paths`` order): those of each distinct unit-cell
+    yarn are computed once (at offset 0) and shared by its copies."""
     shapes: dict[int, list] = {}
     per_yarn = []
     for path in paths:
@@ -231,11 +257,16 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
             shapes[path.cell_index] = fibre_beads(base, fam.offsets_m, fam.beads.bond_length_m,
                                                   periodic)
         per_yarn.append(shapes[path.cell_index])
+    return per_yarn
 
-    # bond types: per family, per yarn spec (overrides), grouped by rest length
+
+def _bond_types(fams: dict[str, FamilyBeads], families: tuple[str, ...],
+                paths: list[YarnPath], per_yarn: list[list], cell_keys: list[str],
+                disc: Discretisation) -> tuple[list[BondType], list[BeadParameters]]:
+    """Bond types per family, per yarn spec (overrides), grouped by rest length [m],
+    with the bead parameters of each; the types of one family form a contiguous range."""
     type_table: list[BondType] = []
     type_params: list[BeadParameters] = []
-    fibre_type = []
     for key in fams:
         fam_name = key.split(":")[0]
         if fam_name not in families:
@@ -253,9 +284,14 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
             type_params.append(p)
     # families first, so that the types of one family stay a contiguous range
     order = sorted(range(len(type_table)), key=lambda k: families.index(type_table[k].family))
-    type_table = [type_table[k] for k in order]
-    type_params = [type_params[k] for k in order]
+    return [type_table[k] for k in order], [type_params[k] for k in order]
 
+
+def _place_beads(paths: list[YarnPath], per_yarn: list[list], families: tuple[str, ...],
+                 cell_keys: list[str], type_table: list[BondType],
+                 type_params: list[BeadParameters]) -> dict:
+    """Per-bead arrays (SI) of every fibre moved to its yarn's offset, as BeadModel
+    keywords, plus ``fibre_type`` (bond type of each fibre) and ``counts`` (its beads)."""
     def type_of(key: str, length: float) -> int:
         best = min((abs(bt.rest_length_m - length), k) for k, bt in enumerate(type_table)
                    if bt.spec == key)
@@ -269,6 +305,7 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
     atype = np.empty(n, np.int64)
     fibre_ids = np.empty(n, np.int64)
     fibre_yarn = []
+    fibre_type = []
     yarns = []
     cursor = 0
     fid = 0
@@ -290,9 +327,16 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
             fibre_ids[sl] = fid
             fibre_yarn.append(yid)
             cursor += k
-    fibre_type = np.asarray(fibre_type, np.int64)
+    return {"positions": pos, "diameters": diam, "masses": mass, "atom_types": atype,
+            "fibre_ids": fibre_ids, "fibre_yarn": np.asarray(fibre_yarn, np.int64),
+            "yarns": yarns, "fibre_type": np.asarray(fibre_type, np.int64), "counts": counts}
 
-    # bonds along each fibre (+ closing bonds when periodic)
+
+def _links(fibre_ids: np.ndarray, fibre_type: np.ndarray, counts: list[int], periodic: bool,
+           disc: Discretisation, type_params: list[BeadParameters],
+           type_table: list[BondType]) -> dict:
+    """Bonds along each fibre (+ closing bonds when periodic) and, with bending, the
+    angles of three consecutive beads, as BeadModel keywords."""
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
     ends = starts + np.asarray(counts, np.int64) - 1
     i = np.flatnonzero(fibre_ids[:-1] == fibre_ids[1:])
@@ -314,13 +358,17 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
             angles = np.vstack([angles, np.column_stack([ends - 1, ends, starts]),
                                 np.column_stack([ends, starts, starts + 1])])
         angle_types = fibre_type[fibre_ids[angles[:, 1]] - 1]
+    return {"bonds": bonds, "bond_types": btypes, "angles": angles, "angle_types": angle_types,
+            "angle_type_table": angle_table}
 
-    # box, wrapping and image flags
-    size = np.array(fabric.size_m)
-    r = 0.5 * diam
-    z_lo, z_hi = float((pos[:, 2] - r).min()), float((pos[:, 2] + r).max())
+
+def _box(size: np.ndarray, pos: np.ndarray, r: np.ndarray, z_extent: tuple[float, float],
+         periodic: bool, pad_fraction: float) -> dict:
+    """Box [m] and image flags; a periodic fabric's beads are wrapped into the box
+    (``pos`` is changed in place). z: one bead-extent thickness of room on each side."""
+    z_lo, z_hi = z_extent
     thickness = z_hi - z_lo
-    images = np.zeros((n, 3), np.int64)
+    images = np.zeros((len(pos), 3), np.int64)
     if periodic:
         box_lo = np.array([0.0, 0.0, z_lo - thickness])
         box_hi = np.array([size[0], size[1], z_hi + thickness])
@@ -333,21 +381,7 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
                            z_lo - thickness])
         box_hi = np.array([(pos[:, 0] + r).max() + pad[0], (pos[:, 1] + r).max() + pad[1],
                            z_hi + thickness])
-
-    model = BeadModel(
-        positions=pos, diameters=diam, masses=mass, atom_types=atype, fibre_ids=fibre_ids,
-        bonds=bonds, bond_types=btypes, family_names=families, bond_type_table=type_table,
-        fibre_yarn=np.asarray(fibre_yarn, np.int64), yarns=yarns, box_lo=box_lo, box_hi=box_hi,
-        periodic=(periodic, periodic, False), images=images, angles=angles,
-        angle_types=angle_types, angle_type_table=angle_table)
-
-    approach = None
-    if check:
-        approach = check_overlaps(model, fabric)
-    model.info = fabric_info(fabric, disc, fams, paths, model, approach, thickness,
-                             (z_lo, z_hi), cell_keys)
-    model.info["build_s"] = time.perf_counter() - t0
-    return model
+    return {"box_lo": box_lo, "box_hi": box_hi, "images": images}
 
 
 def check_overlaps(model: BeadModel, fabric: Fabric | None = None) -> ClosestApproach:
@@ -375,114 +409,3 @@ def check_overlaps(model: BeadModel, fabric: Fabric | None = None) -> ClosestApp
             f"fabric.clearance_m or the yarn spacing, or reduce yarn heights/widths or "
             f"fabric.plateau")
     return res
-
-
-def _centreline_length(path: YarnPath, step: float) -> float:
-    pts = path.centreline(step)
-    return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
-
-
-def fabric_info(fabric: Fabric, disc: Discretisation, fams: dict[str, FamilyBeads],
-                paths: list[YarnPath], model: BeadModel, approach: ClosestApproach | None,
-                thickness: float, z_extent: tuple[float, float],
-                cell_keys: list[str] | None = None) -> dict:
-    """The JSON-able facts stored in ``BeadModel.info`` (see :func:`render_fabric`).
-
-    ``fams`` holds every yarn spec by key (:func:`yarn_spec_beads`) and ``cell_keys``
-    the key of each unit-cell yarn (default: ``fabric.cell_spec_keys()``).
-    """
-    if cell_keys is None:
-        cell_keys = fabric.cell_spec_keys()
-    table = fabric.yarn_spec_table()
-    from ..protocols.common import scene_dict
-
-    arch = fabric.architecture
-    if fabric.is_3d:
-        arch_info = {"kind": "3d", "name": arch.name, "weft_layers": arch.weft_layers,
-                     "columns": arch.columns, "dents": arch.dents,
-                     "warp_gaps": list(arch.warp_gaps),
-                     "binder_paths": [[list(p) for p in dent] for dent in arch.binder_paths],
-                     "separate_binders": arch.separate_binders}
-    else:
-        arch_info = {"kind": "2d", "name": arch.name, "matrix": [list(r) for r in arch.matrix]}
-    size = fabric.size_m
-    crimp: dict[str, float] = {}
-    mass = 0.0
-    for fam in fabric.specs():
-        step = 0.25 * fams[fam].beads.bond_length_m
-        shapes = {p.cell_index: p for p in paths if p.family == fam}
-        ratio = {k: _centreline_length(p, step) / p.length_m for k, p in shapes.items()}
-        crimp[fam] = float(np.mean(list(ratio.values())) - 1.0)
-        # every yarn its own tex and its own shape's length
-        mass += sum(table[cell_keys[p.cell_index]].linear_density_kg_m * p.length_m
-                    * ratio[p.cell_index] for p in paths if p.family == fam)
-    per_family = {}
-    for fam, fb in fams.items():
-        spec = table[fam]
-        per_family[fam] = {
-            "linear_density_tex": spec.linear_density_tex, "n_fibres": spec.n_fibres,
-            "width_m": spec.width_m, "height_m": spec.height_m,
-            "fibre_diameter_m": fb.fibre.diameter_m, "fibre_area_m2": fb.fibre.area_m2,
-            "bond_length_m": fb.beads.bond_length_m,
-            "axial_stiffness_n": fb.fibre.axial_stiffness_n,
-            "modulus_pa": spec.material.modulus_pa,
-            "density_kg_m3": spec.material.density_kg_m3, "material": spec.material.name,
-            "fill_fraction": spec.section.fill_fraction(spec.n_fibres),
-        }
-    pair = None
-    if approach is not None and approach.i >= 0:
-        pair = [model.yarns[model.yarn_ids[approach.i] - 1].name,
-                model.yarns[model.yarn_ids[approach.j] - 1].name]
-    bt_count = {f: sum(1 for bt in model.bond_type_table if bt.family == f)
-                for f in model.family_names}
-    straight = fabric.straight_areal_density_kg_m2()
-    built = mass / (size[0] * size[1])
-    datasheet = {
-        "areal_density_kg_m2": fabric.areal_density_kg_m2,
-        "areal_density_deviation": None if fabric.areal_density_kg_m2 is None
-        else built / fabric.areal_density_kg_m2 - 1.0,
-        "straight_areal_density_kg_m2": straight,
-        "thickness_m": fabric.thickness_m,
-        "thickness_pressure_pa": fabric.thickness_pressure_pa,
-    }
-    yarn_specs = {key: per_family.pop(key) for key in list(per_family) if ":" in key}
-    for key, entry in yarn_specs.items():
-        entry["yarns"] = [p.name for p in paths if cell_keys[p.cell_index] == key]
-    packing = {fam: {"yarn_fibre_volume_fraction": spec.yarn_fibre_volume_fraction,
-                     "filament_area_m2": spec.filament_area_m2,
-                     "section_area_m2": spec.section.area_m2, "shape": spec.shape,
-                     "width_m": spec.width_m, "height_m": spec.height_m,
-                     "woven_width_m": fabric.woven_width_m.get(fam, spec.width_m)}
-               for fam, spec in table.items()}
-    return {
-        "format": INFO_FORMAT,
-        "datasheet": datasheet,
-        "yarn_packing": packing,
-        "architecture": arch_info,
-        "unit_cell_m": list(fabric.unit_cell_m),
-        "tiling": list(fabric.tiling),
-        "fabric_size_m": list(size),
-        "periodic": fabric.periodic,
-        "yarns_per_unit_cell": fabric.yarns_per_unit_cell(),
-        "yarn_axis": {f: FAMILY_AXIS[f] for f in model.family_names},
-        "spacing_m": {f: fabric.spacing(f) for f in model.family_names},
-        "count_per_m": {f: 1.0 / fabric.spacing(f) for f in model.family_names},
-        "families": per_family,
-        "yarn_specs": yarn_specs,
-        "yarn_spec": [cell_keys[p.cell_index] for p in paths],
-        "yarn_offset_m": [p.offset_m for p in paths],
-        "yarn_level": [p.level for p in paths],
-        "z_levels_m": fabric.levels(),
-        "loose_thickness_m": thickness,
-        "z_extent_m": list(z_extent),
-        "thickness_measure": "extent of all beads including their radius",
-        "crimp": crimp,
-        "areal_density_kg_m2": mass / (size[0] * size[1]),
-        "clearance_m": None if approach is None else approach.gap_m,
-        "clearance_pair": pair,
-        "requested_clearance_m": fabric.clearance_m,
-        "lift_m": fabric.lift_m,
-        "bond_types_per_family": bt_count,
-        "discretisation": scene_dict(disc),
-        "fabric": scene_dict(fabric),
-    }

@@ -11,11 +11,14 @@ from __future__ import annotations
 import io
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import InputError
-from .bead_model import AngleType, BeadModel, BondType, Yarn
+
+if TYPE_CHECKING:  # the model imports this module to save and load itself
+    from .bead_model import BeadModel
 
 ATOM_STYLE = "hybrid sphere angle"
 
@@ -199,8 +202,10 @@ def _split_sections(text: str) -> tuple[list[str], dict[str, list[str]]]:
     return header, sections
 
 
-def read_data(path: Path, meta: dict) -> BeadModel:
-    """Read a LAMMPS data file written by fabmd or by LAMMPS ``write_data``."""
+def read_data(path: Path) -> dict:
+    """Read a LAMMPS data file written by fabmd or by LAMMPS ``write_data``: the
+    per-bead and per-link arrays and the box, as :class:`~fabmd.model.bead_model.BeadModel`
+    keywords (SI; the model's metadata adds the rest, see ``BeadModel.load``)."""
     text = Path(path).read_text()
     header, sections = _split_sections(text)
     lo = np.zeros(3)
@@ -233,25 +238,9 @@ def read_data(path: Path, meta: dict) -> BeadModel:
 
     bonds, bond_types = _links("Bonds", 2)
     angles, angle_types = _links("Angles", 3)
-    return BeadModel(
-        positions=atoms[:, 2:5], diameters=diam, masses=mass,
-        atom_types=atoms[:, 1].astype(np.int64), fibre_ids=atoms[:, 7].astype(np.int64),
-        bonds=bonds, bond_types=bond_types,
-        family_names=tuple(meta["families"]),
-        bond_type_table=[BondType(**bt) for bt in meta["bond_types"]],
-        fibre_yarn=np.asarray(meta["fibre_yarn"], np.int64),
-        yarns=[Yarn(**y) for y in meta["yarns"]],
-        box_lo=lo, box_hi=hi, periodic=tuple(meta.get("periodic", (False,) * 3)),
-        images=images, angles=angles, angle_types=angle_types,
-        angle_type_table=[_angle_type(a) for a in meta.get("angle_types", [])],
-        info=meta.get("info", {}),
-    )
-
-
-def _angle_type(entry: dict) -> AngleType:
-    """An angle type from ``model.json`` (files with a bent rest shape are refused)."""
-    if entry.get("rest_angle_deg") not in (None, 180.0):
-        raise InputError("this model was saved by an older fabmd with a bent rest shape for "
-                         "its bending terms, which is no longer supported "
-                         "(fabmd.model.bending); cut the coupon again")
-    return AngleType(entry["coefficient"], entry["family"])
+    return {
+        "positions": atoms[:, 2:5], "diameters": diam, "masses": mass,
+        "atom_types": atoms[:, 1].astype(np.int64), "fibre_ids": atoms[:, 7].astype(np.int64),
+        "bonds": bonds, "bond_types": bond_types, "box_lo": lo, "box_hi": hi,
+        "images": images, "angles": angles, "angle_types": angle_types,
+    }

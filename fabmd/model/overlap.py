@@ -53,10 +53,58 @@ def closest_approach(positions: np.ndarray, diameters: np.ndarray, groups: np.nd
     """
     pos = np.asarray(positions, float)
     diam = np.asarray(diameters, float)
-    grp = np.asarray(groups)
     n = len(pos)
-    dmax = float(diam.max())
-    cutoff = 1.5 * dmax if cutoff_m is None else float(cutoff_m)
+    cutoff = 1.5 * float(diam.max()) if cutoff_m is None else float(cutoff_m)
+    cells = _bin(pos, diam, np.asarray(groups), box_lo, box_hi, periodic, cutoff)
+    best = (np.inf, -1, -1)
+    n_overlap = 0
+    chunk = max(1, pairs_per_chunk // 40)
+    for a in range(0, n, chunk):
+        idx = np.arange(a, min(n, a + chunk))
+        for off in [(0, 0, 0)] + _HALF:
+            pairs = _pairs(cells, idx, off)
+            if pairs is None:
+                continue
+            first, second = pairs
+            d = cells.spos[second] - cells.spos[first]
+            for k in range(3):
+                if cells.periodic[k]:
+                    d[:, k] -= cells.length[k] * np.round(d[:, k] / cells.length[k])
+            dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+            close = dist < cutoff
+            if not close.any():
+                continue
+            gap = dist[close] - 0.5 * (cells.sdiam[first[close]] + cells.sdiam[second[close]])
+            n_overlap += int(np.count_nonzero(gap < -tolerance_m))
+            k = int(np.argmin(gap))
+            if gap[k] < best[0]:
+                best = (float(gap[k]), int(cells.order[first[close][k]]),
+                        int(cells.order[second[close][k]]))
+    if best[1] < 0:
+        return ClosestApproach(None, -1, -1, 0, cutoff)
+    return ClosestApproach(best[0], best[1], best[2], n_overlap, cutoff)
+
+
+@dataclass(frozen=True)
+class _Cells:
+    """Beads sorted by cell (``order``: sorted → given index) and each cell's range."""
+
+    order: np.ndarray
+    sc: np.ndarray  # cell of each sorted bead (3 ints)
+    spos: np.ndarray
+    sdiam: np.ndarray
+    sgrp: np.ndarray
+    ncell: np.ndarray
+    cell_start: np.ndarray
+    gmin: np.ndarray  # smallest and largest group in each cell
+    gmax: np.ndarray
+    periodic: np.ndarray
+    length: np.ndarray  # box length [m] (periodic directions)
+
+
+def _bin(pos: np.ndarray, diam: np.ndarray, grp: np.ndarray, box_lo, box_hi, periodic,
+         cutoff: float) -> _Cells:
+    """Bin the beads into cells at least ``cutoff`` [m] wide."""
     lo = pos.min(axis=0) if box_lo is None else np.asarray(box_lo, float).copy()
     hi = pos.max(axis=0) if box_hi is None else np.asarray(box_hi, float).copy()
     periodic = np.asarray(periodic, bool)
@@ -71,8 +119,7 @@ def closest_approach(positions: np.ndarray, diameters: np.ndarray, groups: np.nd
     key = (c[:, 0] * ncell[1] + c[:, 1]) * ncell[2] + c[:, 2]
     order = np.argsort(key, kind="stable")
     skey = key[order]
-    sc = c[order]
-    spos, sdiam, sgrp = pos[order], diam[order], grp[order]
+    sgrp = grp[order]
     total_cells = int(ncell.prod())
     cell_start = np.searchsorted(skey, np.arange(total_cells + 1))
     # smallest and largest group in each cell: a neighbour cell holding only the bead's
@@ -82,55 +129,42 @@ def closest_approach(positions: np.ndarray, diameters: np.ndarray, groups: np.nd
     gmax = np.zeros(total_cells, sgrp.dtype)
     gmin[occupied] = np.minimum.reduceat(sgrp, cell_start[occupied])
     gmax[occupied] = np.maximum.reduceat(sgrp, cell_start[occupied])
+    return _Cells(order, c[order], pos[order], diam[order], sgrp, ncell, cell_start, gmin,
+                  gmax, periodic, length)
 
-    best = (np.inf, -1, -1)
-    n_overlap = 0
-    chunk = max(1, pairs_per_chunk // 40)
-    for a in range(0, n, chunk):
-        idx = np.arange(a, min(n, a + chunk))
-        for off in [(0, 0, 0)] + _HALF:
-            nc = sc[idx] + np.asarray(off)
-            valid = np.ones(len(idx), bool)
-            for k in range(3):
-                if periodic[k]:
-                    nc[:, k] = np.mod(nc[:, k], ncell[k])
-                else:
-                    valid &= (nc[:, k] >= 0) & (nc[:, k] < ncell[k])
-            nk = (nc[:, 0] * ncell[1] + nc[:, 1]) * ncell[2] + nc[:, 2]
-            nk = np.where(valid, nk, 0)
-            own = sgrp[idx]
-            valid &= ~((gmin[nk] == own) & (gmax[nk] == own))
-            ii = idx[valid]
-            if not len(ii):
-                continue
-            nk = nk[valid]
-            start, stop = cell_start[nk], cell_start[nk + 1]
-            if off == (0, 0, 0):
-                start = np.maximum(start, ii + 1)
-            counts = np.maximum(stop - start, 0)
-            m = int(counts.sum())
-            if m == 0:
-                continue
-            first = np.repeat(ii, counts)
-            base = np.repeat(start - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
-            second = base + np.arange(m)
-            keep = sgrp[first] != sgrp[second]
-            first, second = first[keep], second[keep]
-            if not len(first):
-                continue
-            d = spos[second] - spos[first]
-            for k in range(3):
-                if periodic[k]:
-                    d[:, k] -= length[k] * np.round(d[:, k] / length[k])
-            dist = np.sqrt(np.einsum("ij,ij->i", d, d))
-            close = dist < cutoff
-            if not close.any():
-                continue
-            gap = dist[close] - 0.5 * (sdiam[first[close]] + sdiam[second[close]])
-            n_overlap += int(np.count_nonzero(gap < -tolerance_m))
-            k = int(np.argmin(gap))
-            if gap[k] < best[0]:
-                best = (float(gap[k]), int(order[first[close][k]]), int(order[second[close][k]]))
-    if best[1] < 0:
-        return ClosestApproach(None, -1, -1, 0, cutoff)
-    return ClosestApproach(best[0], best[1], best[2], n_overlap, cutoff)
+
+def _pairs(cells: _Cells, idx: np.ndarray, off: tuple[int, int, int]
+           ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Pairs (sorted indices) of the beads ``idx`` with the beads of the cell at offset
+    ``off`` from theirs, of different groups (None: none); each pair is seen once."""
+    ncell = cells.ncell
+    nc = cells.sc[idx] + np.asarray(off)
+    valid = np.ones(len(idx), bool)
+    for k in range(3):
+        if cells.periodic[k]:
+            nc[:, k] = np.mod(nc[:, k], ncell[k])
+        else:
+            valid &= (nc[:, k] >= 0) & (nc[:, k] < ncell[k])
+    nk = (nc[:, 0] * ncell[1] + nc[:, 1]) * ncell[2] + nc[:, 2]
+    nk = np.where(valid, nk, 0)
+    own = cells.sgrp[idx]
+    valid &= ~((cells.gmin[nk] == own) & (cells.gmax[nk] == own))
+    ii = idx[valid]
+    if not len(ii):
+        return None
+    nk = nk[valid]
+    start, stop = cells.cell_start[nk], cells.cell_start[nk + 1]
+    if off == (0, 0, 0):
+        start = np.maximum(start, ii + 1)
+    counts = np.maximum(stop - start, 0)
+    m = int(counts.sum())
+    if m == 0:
+        return None
+    first = np.repeat(ii, counts)
+    base = np.repeat(start - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
+    second = base + np.arange(m)
+    keep = cells.sgrp[first] != cells.sgrp[second]
+    first, second = first[keep], second[keep]
+    if not len(first):
+        return None
+    return first, second

@@ -134,26 +134,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
     engine = engine or Engine(progress=False)
     max_runs = inputs.positive_int("calibration.max_runs", max_runs, minimum=2)
     fams = tuple(thickness_families or default_thickness_families(model))
-    unknown = (set(fams) | set(targets.crimp_pct)) - set(model.family_names)
-    if unknown:
-        raise InputError(f"calibration names families {sorted(unknown)}; the fabric has "
-                         f"{list(model.family_names)}")
-    knobs: list[_Knob] = []
-    if targets.thickness_m is not None:
-        loose = thickness_m(model)
-        if targets.thickness_m >= loose:
-            raise InputError(f"targets.thickness_m = {targets.thickness_m:.4g} m is not below "
-                             f"the loose fabric's thickness {loose:.4g} m: crimping only compacts; "
-                             f"build a thicker loose fabric or lower the target")
-        start = min((base.expansion.get(f, 0.0) for f in fams), default=0.0)
-        knobs.append(_Knob("thickness", fams, targets.thickness_m,
-                           targets.thickness_tolerance * targets.thickness_m, +1,
-                           start if start < 0 else -0.03))
-    for fam, crimp_target in targets.crimp_pct.items():
-        if fam in fams and targets.thickness_m is not None:
-            continue  # that family's strain is taken by the thickness
-        knobs.append(_Knob(f"crimp:{fam}", (fam,), crimp_target, targets.crimp_tolerance_pct,
-                           +1, base.expansion.get(fam, 0.0)))
+    knobs = _knobs(model, targets, base, fams)
     root = prepare_run_folder(out, overwrite=overwrite, prefix="calibration")
     runs: list[dict] = []
     best: CrimpResult | None = None
@@ -179,24 +160,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
         if all(knob.converged(achieved[knob.name]) for knob in knobs):
             reached = True
             break
-        stuck = []
-        for knob in knobs:
-            if knob.converged(achieved[knob.name]):
-                continue
-            new = knob.next_value()
-            if abs(new) > STRAIN_LIMIT:
-                stuck.append(knob)
-                new = max(-STRAIN_LIMIT, min(STRAIN_LIMIT, new))
-                if abs(knob.value) >= STRAIN_LIMIT - 1e-12:
-                    reason = (f"{knob.name}: target {knob.target:.4g} not reached with a strain "
-                              f"of {knob.value:+.2f} on {', '.join(knob.families)} (limit "
-                              f"±{STRAIN_LIMIT}); reached {achieved[knob.name]:.4g}. "
-                              + ("The yarns are already pressed together as far as their "
-                                 "fibres and contact allow: lower the target, or describe "
-                                 "thinner yarns (fewer/smaller virtual fibres)"
-                                 if knob.name == "thickness" else
-                                 "the yarns cannot take that waviness: check the target"))
-            knob.value = new
+        reason = _step(knobs, achieved)
         if reason:
             break
     if not reached and not reason:
@@ -211,6 +175,56 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
     summary = mpi.bcast_json(summary)
     return CalibrationResult(summary["expansion"], summary["achieved"], reached,
                              reason, summary["runs"], best, root)
+
+
+def _knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
+           fams: tuple[str, ...]) -> list[_Knob]:
+    """One knob per target: the thickness (the expansion of ``fams``) and the crimp of
+    each other family, started from the base crimp's expansion; impossible targets raise."""
+    unknown = (set(fams) | set(targets.crimp_pct)) - set(model.family_names)
+    if unknown:
+        raise InputError(f"calibration names families {sorted(unknown)}; the fabric has "
+                         f"{list(model.family_names)}")
+    knobs: list[_Knob] = []
+    if targets.thickness_m is not None:
+        loose = thickness_m(model)
+        if targets.thickness_m >= loose:
+            raise InputError(f"targets.thickness_m = {targets.thickness_m:.4g} m is not below "
+                             f"the loose fabric's thickness {loose:.4g} m: crimping only compacts; "
+                             f"build a thicker loose fabric or lower the target")
+        start = min((base.expansion.get(f, 0.0) for f in fams), default=0.0)
+        knobs.append(_Knob("thickness", fams, targets.thickness_m,
+                           targets.thickness_tolerance * targets.thickness_m, +1,
+                           start if start < 0 else -0.03))
+    for fam, crimp_target in targets.crimp_pct.items():
+        if fam in fams and targets.thickness_m is not None:
+            continue  # that family's strain is taken by the thickness
+        knobs.append(_Knob(f"crimp:{fam}", (fam,), crimp_target, targets.crimp_tolerance_pct,
+                           +1, base.expansion.get(fam, 0.0)))
+    return knobs
+
+
+def _step(knobs: list[_Knob], achieved: dict[str, float]) -> str:
+    """Move every knob not yet converged to its next value (within ±STRAIN_LIMIT);
+    the reason to stop when one is stuck at the limit, else ""."""
+    reason = ""
+    for knob in knobs:
+        if knob.converged(achieved[knob.name]):
+            continue
+        new = knob.next_value()
+        if abs(new) > STRAIN_LIMIT:
+            new = max(-STRAIN_LIMIT, min(STRAIN_LIMIT, new))
+            if abs(knob.value) >= STRAIN_LIMIT - 1e-12:
+                reason = (f"{knob.name}: target {knob.target:.4g} not reached with a strain "
+                          f"of {knob.value:+.2f} on {', '.join(knob.families)} (limit "
+                          f"±{STRAIN_LIMIT}); reached {achieved[knob.name]:.4g}. "
+                          + ("The yarns are already pressed together as far as their "
+                             "fibres and contact allow: lower the target, or describe "
+                             "thinner yarns (fewer/smaller virtual fibres)"
+                             if knob.name == "thickness" else
+                             "the yarns cannot take that waviness: check the target"))
+        knob.value = new
+    return reason
 
 
 def _achieved(result: CrimpResult, knobs: list[_Knob]) -> dict[str, float]:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .trajectory import TRAJECTORY_FILE
+from ..analysis.trajectory_file import TRAJECTORY_FILE
 
 
 def fibre_shear_angles(run_dir: Path, centre, half_size, reference_deg: float = 45.0,

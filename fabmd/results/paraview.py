@@ -102,7 +102,7 @@ class ParaViewSeries:
 
 def export_paraview(trajectory: Path, folder: Path | None = None) -> Path:
     """ParaView series of an existing ``trajectory.h5`` (into its folder by default)."""
-    from .trajectory import Frame, open_trajectory, read_lengths, read_model
+    from ..analysis.trajectory_file import Frame, open_trajectory, read_lengths, read_model
 
     trajectory = Path(trajectory)
     folder = Path(folder) if folder is not None else trajectory.parent

@@ -32,9 +32,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.trajectory_file import (
+    TRAJECTORY_FILE,
+    length_scale_m,
+    open_trajectory,
+    read_lengths,
+)
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from .trajectory import TRAJECTORY_FILE, length_scale_m, open_trajectory, read_lengths
 
 #: data files a run folder may hold, in the order :func:`load` prefers them without a trajectory
 DATA_FILES = ("final.data", "model.data")

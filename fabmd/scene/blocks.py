@@ -176,10 +176,10 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
     if contact_model is None:
         return render("contact_none")
     if contact_model.split:  # per type pair: pair_style granular (ContactModel docstring)
-        lines = [f"pair_coeff      {i} {j} hooke {fmt(c['kn'])} {fmt(c['gamman'])} "
-                 f"tangential linear_history {fmt(c['kt'])} "
-                 f"{fmt(c['gammat'] / c['gamman'])} {fmt(c['friction'])} "
-                 "damping mass_velocity"
+        lines = [render_inline("pair_coeff_granular_split", i=i, j=j, kn=fmt(c["kn"]),
+                               gamman=fmt(c["gamman"]), kt=fmt(c["kt"]),
+                               xgammat=fmt(c["gammat"] / c["gamman"]),
+                               friction=fmt(c["friction"]))
                  for i, j, c in contact_model.type_pair_coefficients(
                      beads, len(model.family_names))]
         return render("contact_granular_split", friction=contact_model.friction,
