@@ -6,21 +6,26 @@ import dataclasses
 import enum
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
 from ..engine import Engine, EngineResult, mpi
 from ..engine.library import REQUIRED_PACKAGES
 from ..engine.run_script import run_sh_text
-from ..errors import OverlapWarning
+from ..errors import OverlapWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.contact import ContactModel
 from ..results.folder import prepare_run_folder, read_print_file, write_csv, write_json
+from ..results.trajectory import finalise, salvage
 from ..scene.blocks import OVERLAP_FILE, TOOL_OVERLAP_WARNING
+from ..scene.outputs import TrajectoryOutput
 
 DATA_FILE = "model.data"
+T = TypeVar("T")
 
 
 @dataclass
@@ -144,6 +149,28 @@ def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = Fals
     """Run the protocol's input in ``run_dir`` with ``engine`` (``resume``: from its
     checkpoint)."""
     return engine.run(run_dir, input_name(protocol), label=protocol, resume=resume)
+
+
+def open_run_folder(out: Path | None, protocol: str, model: BeadModel, input_text: str,
+                    scene: dict, overwrite: bool = False, resume: bool = False) -> Path:
+    """The run folder: ``out`` to resume from its checkpoint (``resume``), else a new one
+    (:func:`write_run_folder`)."""
+    if resume:
+        return resume_folder(out)
+    return write_run_folder(out, protocol, model, input_text, scene, overwrite=overwrite)
+
+
+def run_with_trajectory(run: Callable[[], T], run_dir: Path, trajectory: TrajectoryOutput,
+                        model: BeadModel) -> tuple[T, Path | None]:
+    """``run()``, then its trajectory converted (:func:`fabmd.results.trajectory.finalise`,
+    every rank); a failed run keeps the frames up to the failure (``salvage``) and raises.
+    Returns what ``run`` returned and the trajectory file (None: none written)."""
+    try:
+        result = run()
+    except SimulationFailed:
+        salvage(run_dir, paraview=trajectory.paraview, model=model)
+        raise
+    return result, finalise(run_dir, paraview=trajectory.paraview, model=model)
 
 
 def overlap_summary(run_dir: Path, contact_model: ContactModel | None = None,
