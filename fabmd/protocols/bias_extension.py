@@ -39,14 +39,7 @@ from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..scene.energy import ContactPower
-from .driven import (
-    COUPON_NOTE,
-    ClampedTest,
-    DrivenResult,
-    energy_columns,
-    quasi_static_evidence,
-    read_outputs,
-)
+from .driven import ClampedTest, DrivenResult, energy_columns, read_outputs
 from .tension import Tension
 
 PROTOCOL = "bias_extension"
@@ -89,27 +82,23 @@ class BiasExtension(ClampedTest):
     passes it (0.047), and the forces at 2e-4 are within 3 % of those at 1e-4.
     """
 
+    protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
+    rate_curve: ClassVar[tuple[str, str]] = ("displacement_m", "force_n")
+    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n_m"}
+
     max_shear_angle_deg: float = 40.0
     max_displacement_m: float | None = None
     clamp_length_m: float | None = None
     central_zone_fraction: float = 0.2
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
-    rate_curve: ClassVar[tuple[str, str]] = ("displacement_m", "force_n")
-    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n_m"}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         inputs.in_range("bias_extension.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
                         low_open=True)
-        if self.max_displacement_m is not None:
-            inputs.positive("bias_extension.max_displacement_m", self.max_displacement_m)
-        if self.clamp_length_m is not None:
-            inputs.positive("bias_extension.clamp_length_m", self.clamp_length_m)
+        self.check_positive_or_none("max_displacement_m", "clamp_length_m")
         inputs.in_range("bias_extension.central_zone_fraction", self.central_zone_fraction,
                         0, 0.5, low_open=True)
-        self.check_loading()
 
     # -- geometry ---------------------------------------------------------------------
     def width_m(self, model: BeadModel) -> float:
@@ -214,7 +203,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
             "steps": steps.tolist(), "kinematic_deg": kinematic.tolist(),
             "fibres_deg": fibre_gamma.tolist(),
             "max_difference_deg": float(diff.max()) if len(diff) else None},
-        **quasi_static_evidence(out, test.loading(model), d / dmax, COUPON_NOTE),
+        **test.quasi_static_evidence(out, model, d / dmax),
     }
     ke = summary["max_kinetic_to_strain_energy"]
     plots = [

@@ -6,10 +6,8 @@ import dataclasses
 import enum
 import math
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypeVar
 
 import numpy as np
 
@@ -25,7 +23,6 @@ from ..scene.blocks import OVERLAP_FILE, TOOL_OVERLAP_WARNING
 from ..scene.outputs import TrajectoryOutput
 
 DATA_FILE = "model.data"
-T = TypeVar("T")
 
 
 @dataclass
@@ -144,11 +141,11 @@ def resume_folder(out: Path | None) -> Path:
     return Path(out).resolve()
 
 
-def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = False
-               ) -> EngineResult:
+def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = False,
+               **options) -> EngineResult:
     """Run the protocol's input in ``run_dir`` with ``engine`` (``resume``: from its
-    checkpoint)."""
-    return engine.run(run_dir, input_name(protocol), label=protocol, resume=resume)
+    checkpoint; ``options``: more keywords of :meth:`Engine.run`, e.g. ``monitor``)."""
+    return engine.run(run_dir, input_name(protocol), label=protocol, resume=resume, **options)
 
 
 def open_run_folder(out: Path | None, protocol: str, model: BeadModel, input_text: str,
@@ -160,17 +157,19 @@ def open_run_folder(out: Path | None, protocol: str, model: BeadModel, input_tex
     return write_run_folder(out, protocol, model, input_text, scene, overwrite=overwrite)
 
 
-def run_with_trajectory(run: Callable[[], T], run_dir: Path, trajectory: TrajectoryOutput,
-                        model: BeadModel) -> tuple[T, Path | None]:
-    """``run()``, then its trajectory converted (:func:`fabmd.results.trajectory.finalise`,
-    every rank); a failed run keeps the frames up to the failure (``salvage``) and raises.
-    Returns what ``run`` returned and the trajectory file (None: none written)."""
+def run_with_trajectory(engine: Engine, run_dir: Path, protocol: str,
+                        trajectory: TrajectoryOutput, model: BeadModel, resume: bool = False,
+                        **options) -> tuple[EngineResult, Path | None]:
+    """:func:`run_folder`, then the run's trajectory converted
+    (:func:`fabmd.results.trajectory.finalise`, every rank); a failed run keeps the frames
+    up to the failure (``salvage``) and raises. Returns the engine's result and the
+    trajectory file (None: none written)."""
     try:
-        result = run()
+        run = run_folder(engine, run_dir, protocol, resume, **options)
     except SimulationFailed:
         salvage(run_dir, paraview=trajectory.paraview, model=model)
         raise
-    return result, finalise(run_dir, paraview=trajectory.paraview, model=model)
+    return run, finalise(run_dir, paraview=trajectory.paraview, model=model)
 
 
 def overlap_summary(run_dir: Path, contact_model: ContactModel | None = None,

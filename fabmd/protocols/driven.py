@@ -23,7 +23,7 @@ trajectory (after a failed run too: the frames up to the failure), reduces it, j
 (:mod:`fabmd.protocols.verdict`), and with ``check_rate`` reruns at half speed and
 reports how much the curve moved. :class:`RelaxedDrivenTest` adds the free relaxation
 before the loading (``relax``), :class:`ClampedTest` the drag choice of the coupon tests
-(``drag``). :func:`read_outputs`, :func:`energy_columns`, :func:`quasi_static_evidence`
+(``drag``). :func:`read_outputs`, :func:`energy_columns`, :meth:`~DrivenTest.quasi_static_evidence`
 assemble the quasi-static evidence the same way for every protocol.
 """
 
@@ -52,14 +52,7 @@ from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render
-from .common import (
-    DATA_FILE,
-    RunResult,
-    input_name,
-    open_run_folder,
-    run_with_trajectory,
-    scene_dict,
-)
+from .common import DATA_FILE, RunResult, open_run_folder, run_with_trajectory, scene_dict
 from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
@@ -90,7 +83,7 @@ class DrivenTest:
     default, adds its own fields, and defines ``protocol``, ``rate_curve`` (x and y
     columns compared by ``check_rate``), ``rate_keys`` (summary keys compared by
     ``check_rate``: {report name: key}), :meth:`travel_m`, :meth:`input_text` and
-    :meth:`reduce`; its ``__post_init__`` calls :meth:`check_loading`.
+    :meth:`reduce`; :meth:`check_fields` validates its own fields when it is built.
 
     Args:
         speed_fraction: speed of the driven boundary (clamp, corner, box face, punch)
@@ -121,6 +114,10 @@ class DrivenTest:
     quasi_static_limits: ClassVar[dict[str, float]] = QUASI_STATIC_LIMITS
     #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
     interval_axis: ClassVar[tuple[str, float] | None] = None
+    #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
+    quasi_static_note: ClassVar[str] = ("kinetic energy over the bond strain energy and over "
+                                        "the work done so far, after the smooth start and "
+                                        "the first tenth of the test")
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -140,6 +137,20 @@ class DrivenTest:
 
     def make_monitor(self) -> ContactPower:
         return ContactPower()
+
+    def quasi_static_evidence(self, out: Outputs, model: BeadModel, progress: np.ndarray,
+                              work_ratio: bool = True) -> dict:
+        """The summary's quasi-static evidence: the largest kinetic / strain energy and
+        (``work_ratio``) kinetic energy / work done after start-up (:func:`started_mask`;
+        ``progress`` of the test in [0, 1]), what they cover (``quasi_static_note``;
+        :data:`STARTED_NOTE` without ``work_ratio``) and the energy balance."""
+        started = started_mask(out, self.loading(model), progress)
+        evidence = {"max_kinetic_to_strain_energy": kinetic_ratio(out, started)}
+        if work_ratio:
+            evidence["max_kinetic_to_external_work"] = kinetic_to_work_ratio(out, started)
+        note = self.quasi_static_note if work_ratio else STARTED_NOTE
+        evidence.update(quasi_static_note=note, energy_balance=energy_balance(out))
+        return evidence
 
     # -- loading and time ------------------------------------------------------------
     def wave_speed_m_s(self, model: BeadModel) -> float:
@@ -189,14 +200,26 @@ class DrivenTest:
         velocity (``"absolute"``); :mod:`fabmd.scene.drag`."""
         return drag_commands(getattr(self, "drag", "absolute"), "free", self.gamma(model), field)
 
+    def __post_init__(self):
+        self.check_fields()
+        self.check_loading()
+
+    def check_fields(self) -> None:
+        """Validate the protocol's own fields (errors name ``<protocol>.<field>``)."""
+
+    def check_positive_or_none(self, *names: str) -> None:
+        """Each field in ``names`` None (the default is derived) or > 0."""
+        for name in names:
+            if getattr(self, name) is not None:
+                inputs.positive(f"{self.protocol}.{name}", getattr(self, name))
+
     def check_loading(self) -> None:
         """Validate the fields every driven test has (speed, ramp, damping time, samples,
         trajectory); errors name ``<protocol>.<field>``."""
         name = self.protocol
         inputs.in_range(f"{name}.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
         inputs.in_range(f"{name}.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive(f"{name}.damping_time_s", self.damping_time_s)
+        self.check_positive_or_none("damping_time_s")
         inputs.positive_int(f"{name}.samples", self.samples, minimum=10)
         check_trajectory(f"{name}.trajectory", self.trajectory)
         if hasattr(self, "drag"):
@@ -264,10 +287,9 @@ class DrivenTest:
         run_dir = open_run_folder(out, self.protocol, start, text,
                                   {self.protocol: scene_dict(self)}, overwrite, resume)
         monitor = monitor or self.make_monitor()
-        run, trajectory = run_with_trajectory(
-            lambda: engine.run(run_dir, input_name(self.protocol), label=self.protocol,
-                               monitor=monitor, monitor_every=self.every(start),
-                               resume=resume), run_dir, self.trajectory, start)
+        run, trajectory = run_with_trajectory(engine, run_dir, self.protocol, self.trajectory,
+                                              start, resume, monitor=monitor,
+                                              monitor_every=self.every(start))
         result = None
         if mpi.is_root():
             result = self.reduce(run_dir, start, monitor)
@@ -331,6 +353,19 @@ class ClampedTest(RelaxedDrivenTest):
     """
 
     drag: str = "affine"
+
+    quasi_static_note: ClassVar[str] = (
+        "kinetic energy of the free fabric over the bond strain energy and over the work "
+        "done so far, after the smooth start and the first tenth of the displacement")
+
+    @staticmethod
+    def clamp_edges(x: np.ndarray, low_m: float, high_m: float) -> tuple[float, float]:
+        """The clamp edges ``low_m`` (beads at or below it clamped) and ``high_m`` (at or
+        above) along the bead coordinates ``x``, each moved midway between two beads, so
+        that LAMMPS's region test and Python's cannot disagree on a bead on an edge [m]."""
+        low = 0.5 * (x[x <= low_m].max() + x[x > low_m].min())
+        high = 0.5 * (x[x < high_m].max() + x[x >= high_m].min())
+        return float(low), float(high)
 
 
 def shared_result(result: DrivenResult | None, run_dir: Path) -> DrivenResult:
@@ -420,38 +455,6 @@ def started_mask(out: Outputs, loading: SmoothStartSpeed, progress: np.ndarray,
     u = out["strain_energy_j"]
     loaded = (u - u[0]) > 0.01 * (u[-1] - u[0])
     return (out["time_s"] > loading.ramp_time_s) & (np.asarray(progress) > fraction) & loaded
-
-
-#: what the quasi-static measures of a driven test cover (the coupon tests: fabric and
-#: displacement; the periodic cells: the whole test)
-COUPON_NOTE = ("kinetic energy of the free fabric over the bond strain energy and over the "
-               "work done so far, after the smooth start and the first tenth of the "
-               "displacement")
-CELL_NOTE = ("kinetic energy over the bond strain energy and over the work done so far, "
-             "after the smooth start and the first tenth of the test")
-
-
-def quasi_static_evidence(out: Outputs, loading: SmoothStartSpeed, progress: np.ndarray,
-                          note: str, work_ratio: bool = True) -> dict:
-    """The summary's quasi-static evidence: largest kinetic / strain energy (and, with
-    ``work_ratio``, kinetic energy / work done) after start-up (:func:`started_mask`;
-    ``progress`` of the test in [0, 1]), what they cover (``note``), the energy balance."""
-    started = started_mask(out, loading, progress)
-    evidence = {"max_kinetic_to_strain_energy": kinetic_ratio(out, started)}
-    if work_ratio:
-        evidence["max_kinetic_to_external_work"] = kinetic_to_work_ratio(out, started)
-    evidence.update(quasi_static_note=note, energy_balance=energy_balance(out))
-    return evidence
-
-
-# -- clamps -----------------------------------------------------------------------------
-def clamp_edges(x: np.ndarray, low_m: float, high_m: float) -> tuple[float, float]:
-    """The clamp edges ``low_m`` (beads at or below it clamped) and ``high_m`` (at or
-    above) along the bead coordinates ``x``, each moved midway between two beads, so that
-    LAMMPS's region test and Python's cannot disagree on a bead that sits on an edge [m]."""
-    low = 0.5 * (x[x <= low_m].max() + x[x > low_m].min())
-    high = 0.5 * (x[x < high_m].max() + x[x >= high_m].min())
-    return float(low), float(high)
 
 
 def clamp_power(group: str = "clamps") -> tuple[str, str]:

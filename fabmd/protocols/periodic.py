@@ -38,14 +38,7 @@ from ..results.figure import report_marks
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.templates import fmt, render
-from .driven import (
-    CELL_NOTE,
-    DrivenResult,
-    RelaxedDrivenTest,
-    energy_columns,
-    quasi_static_evidence,
-    read_outputs,
-)
+from .driven import DrivenResult, RelaxedDrivenTest, energy_columns, read_outputs
 from .picture_frame import interval_force
 
 TRANSVERSE = ("held", "free")
@@ -116,7 +109,7 @@ class _PeriodicCellTest(RelaxedDrivenTest):
             "time_step_s": self.time_step_s(model),
             "steps": self.steps(model),
             "boundary_speed_m_s": self.loading(model).speed_m_s,
-            **quasi_static_evidence(out, self.loading(model), progress, CELL_NOTE),
+            **self.quasi_static_evidence(out, model, progress),
         }
 
 
@@ -132,25 +125,24 @@ class PeriodicTension(_PeriodicCellTest):
         report_strains_pct: strains at which N_xx is reported.
     """
 
-    speed_fraction: float = 2e-4
-    max_strain_pct: float = 2.0
-    transverse: str = "held"
-    transverse_damping_fraction: float = 0.1
-    report_strains_pct: tuple[float, ...] = (0.5, 1.0)
-
     protocol: ClassVar[str] = "periodic_tension"
     title: ClassVar[str] = "uniaxial tension along x"
     rate_curve: ClassVar[tuple[str, str]] = ("strain_pct", "force_per_width_n_m")
     rate_keys: ClassVar[dict[str, str]] = {
         "initial_stiffness_change": "initial_stiffness_n_m_per_width"}
 
-    def __post_init__(self):
+    speed_fraction: float = 2e-4
+    max_strain_pct: float = 2.0
+    transverse: str = "held"
+    transverse_damping_fraction: float = 0.1
+    report_strains_pct: tuple[float, ...] = (0.5, 1.0)
+
+    def check_fields(self) -> None:
         inputs.in_range("periodic_tension.max_strain_pct", self.max_strain_pct, 0, 50,
                         low_open=True)
         inputs.one_of("periodic_tension.transverse", self.transverse, TRANSVERSE)
         inputs.in_range("periodic_tension.transverse_damping_fraction",
                         self.transverse_damping_fraction, 0, 1, low_open=True)
-        self.check_loading()
 
     def travel_m(self, model: BeadModel) -> float:
         return self.cell(model)[0] * self.max_strain_pct / 100
@@ -240,20 +232,19 @@ class PeriodicShear(_PeriodicCellTest):
         report_angles_deg: shear angles at which forces are reported.
     """
 
-    speed_fraction: float = 1e-3
-    max_shear_angle_deg: float = 40.0
-    report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
-
     protocol: ClassVar[str] = "periodic_shear"
     title: ClassVar[str] = "trellis shear"
     rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
     rate_keys: ClassVar[dict[str, str]] = {
         "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
 
-    def __post_init__(self):
+    speed_fraction: float = 1e-3
+    max_shear_angle_deg: float = 40.0
+    report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
+
+    def check_fields(self) -> None:
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
                         low_open=True)
-        self.check_loading()
 
     def travel_m(self, model: BeadModel) -> float:
         """Arc the turning edge's end travels, b·γ [m]."""

@@ -45,16 +45,7 @@ from ..results.figure import report_marks
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.templates import fmt, render
-from .driven import (
-    COUPON_NOTE,
-    ClampedTest,
-    DrivenResult,
-    clamp_edges,
-    clamp_power,
-    energy_columns,
-    quasi_static_evidence,
-    read_outputs,
-)
+from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
 
 PROTOCOL = "picture_frame"
 
@@ -131,6 +122,13 @@ class PictureFrame(ClampedTest):
             from it (> 1).
     """
 
+    protocol: ClassVar[str] = PROTOCOL
+    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
+    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys: ClassVar[dict[str, str]] = {
+        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
+        "locking_angle_change": "locking_angle_deg"}
+
     speed_fraction: float = 1e-3
     max_shear_angle_deg: float = 60.0
     max_displacement_m: float | None = None
@@ -142,26 +140,13 @@ class PictureFrame(ClampedTest):
     locking_initial_deg: tuple[float, float] = (5.0, 15.0)
     locking_factor: float = 2.0
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
-    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
-        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
-        "locking_angle_change": "locking_angle_deg"}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         inputs.in_range("picture_frame.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
                         low_open=True)
-        if self.max_displacement_m is not None:
-            inputs.positive("picture_frame.max_displacement_m", self.max_displacement_m)
-        if self.frame_length_m is not None:
-            inputs.positive("picture_frame.frame_length_m", self.frame_length_m)
-        if self.clamp_width_m is not None:
-            inputs.positive("picture_frame.clamp_width_m", self.clamp_width_m)
+        self.check_positive_or_none("max_displacement_m", "frame_length_m", "clamp_width_m")
         inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, 0, 0.05,
                         high_open=True)
         inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
-        self.check_loading()
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
         lo, hi = self.locking_initial_deg
@@ -191,7 +176,7 @@ class PictureFrame(ClampedTest):
             raise InputError(f"picture_frame.clamp_width_m = {clamp:g} m leaves too little free "
                              f"fabric on a {side:g} m coupon; use at most {0.35 * side:g} m")
         edges = [e for k in range(2)
-                 for e in clamp_edges(p[:, k], p[:, k].min() + clamp, p[:, k].max() - clamp)]
+                 for e in self.clamp_edges(p[:, k], p[:, k].min() + clamp, p[:, k].max() - clamp)]
         centre = (lo + hi) / 2
         pin = centre - frame / 2
         return FrameGeometry(pin_a=(float(pin[0]), float(pin[1])), frame_length_m=float(frame),
@@ -376,7 +361,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
             "fibres_deg": fibre_gamma.tolist(),
             "max_difference_deg": float(np.abs(fibre_gamma - kinematic).max())
             if len(steps) else None},
-        **quasi_static_evidence(out, test.loading(model), d / dmax, COUPON_NOTE),
+        **test.quasi_static_evidence(out, model, d / dmax),
     }
     series = [{"x": gamma, "y": fnorm, "label": "F_norm = F_s L_frame / L_fabric²"}]
     if lock["found"]:

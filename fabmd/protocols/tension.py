@@ -24,16 +24,7 @@ from ..results.curves import bilinear_fit, values_at
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.templates import fmt, render
-from .driven import (
-    STARTED_NOTE,
-    ClampedTest,
-    DrivenResult,
-    clamp_edges,
-    clamp_power,
-    energy_columns,
-    quasi_static_evidence,
-    read_outputs,
-)
+from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
 
 PROTOCOL = "tension"
 
@@ -52,21 +43,19 @@ class Tension(ClampedTest):
         report_elongations_pct: elongations at which forces are reported.
     """
 
-    max_elongation_pct: float = 3.0
-    clamp_length_m: float | None = None
-    report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
-
     protocol: ClassVar[str] = PROTOCOL
     interval_axis: ClassVar[tuple[str, float] | None] = ("elongation_pct", 0.25)
     rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
     rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n"}
 
-    def __post_init__(self):
+    max_elongation_pct: float = 3.0
+    clamp_length_m: float | None = None
+    report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
+
+    def check_fields(self) -> None:
         inputs.in_range("tension.max_elongation_pct", self.max_elongation_pct, 0, 50,
                         low_open=True)
-        if self.clamp_length_m is not None:
-            inputs.positive("tension.clamp_length_m", self.clamp_length_m)
-        self.check_loading()
+        self.check_positive_or_none("clamp_length_m")
 
     # -- geometry of the coupon --------------------------------------------------------
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
@@ -80,7 +69,7 @@ class Tension(ClampedTest):
         if 2 * clamp >= 0.8 * length:
             raise InputError(f"tension.clamp_length_m = {clamp:g} m leaves no gauge length on a "
                              f"{length:g} m coupon; use at most {0.4 * length:g} m per end")
-        left, right = clamp_edges(x, float(x.min() + clamp), float(x.max() - clamp))
+        left, right = self.clamp_edges(x, float(x.min() + clamp), float(x.max() - clamp))
         gauge = float(x[x > right].min() - x[x < left].max())
         return float(left), float(right), gauge
 
@@ -160,9 +149,8 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         "clamp_force_mismatch": float(np.abs(out["force_left_n"] + out["force_right_n"])[-1]
                                       / max(abs(force[-1]), 1e-300)),
         # start-up: the smooth start, the first tenth of the elongation and the slack toe
-        **quasi_static_evidence(out, test.loading(coupon),
-                                elongation / (test.max_elongation_pct / 100), STARTED_NOTE,
-                                work_ratio=False),
+        **test.quasi_static_evidence(out, coupon, elongation / (test.max_elongation_pct / 100),
+                                     work_ratio=False),
     }
     ke = summary["max_kinetic_to_strain_energy"]
     plot = {"path": "curve.png",
