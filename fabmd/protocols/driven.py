@@ -23,8 +23,9 @@ trajectory (after a failed run too: the frames up to the failure), reduces it, j
 (:mod:`fabmd.protocols.verdict`), and with ``check_rate`` reruns at half speed and
 reports how much the curve moved. :class:`RelaxedDrivenTest` adds the free relaxation
 before the loading (``relax``), :class:`ClampedTest` the drag choice of the coupon tests
-(``drag``). :func:`read_outputs`, :func:`energy_columns`, :meth:`~DrivenTest.quasi_static_evidence`
-assemble the quasi-static evidence the same way for every protocol.
+(``drag``). :func:`read_outputs`, :func:`energy_columns` and
+:meth:`DrivenTest.quasi_static_evidence` assemble the quasi-static evidence the same way
+for every protocol.
 """
 
 from __future__ import annotations
@@ -251,6 +252,14 @@ class DrivenTest:
         ``self.trajectory.final_commands()`` after the run."""
         return self.trajectory.commands(self.steps(model), multiple_of=self.every(model))
 
+    def relax_block(self, model: BeadModel, held: str, free: str,
+                    reference_force_n: float) -> str:
+        """Free relaxation with ``held`` fixed until quasi-static (``self.relax``)."""
+        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
+        n = int(model.fibre_bond_mask().sum())
+        return blocks.relax(model, self.time_step_s(model), held, free, self.relax,
+                            reference_force_n, n * reference_force_n**2 / (2 * k))
+
     def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
                       mean_values: str = "", mean_names: str = "", print_values: str = "",
                       print_names: str = "", thermo_values: str = "",
@@ -331,14 +340,6 @@ class RelaxedDrivenTest(DrivenTest):
     """
 
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
-
-    def relax_block(self, model: BeadModel, held: str, free: str,
-                    reference_force_n: float) -> str:
-        """Free relaxation with ``held`` fixed until quasi-static (``self.relax``)."""
-        k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
-        n = int(model.fibre_bond_mask().sum())
-        return blocks.relax(model, self.time_step_s(model), held, free, self.relax,
-                            reference_force_n, n * reference_force_n**2 / (2 * k))
 
 
 @dataclass(frozen=True, kw_only=True)
