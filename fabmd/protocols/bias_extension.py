@@ -28,7 +28,6 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
 
 import numpy as np
 
@@ -82,10 +81,10 @@ class BiasExtension(ClampedTest):
     passes it (0.047), and the forces at 2e-4 are within 3 % of those at 1e-4.
     """
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
-    rate_curve: ClassVar[tuple[str, str]] = ("displacement_m", "force_n")
-    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n_m"}
+    protocol = PROTOCOL
+    interval_axis = ("shear_angle_deg", 5.0)
+    rate_curve = ("displacement_m", "force_n")
+    rate_keys = {"initial_stiffness_change": "initial_stiffness_n_m"}
 
     max_shear_angle_deg: float = 40.0
     max_displacement_m: float | None = None

@@ -80,11 +80,13 @@ class DrivenResult(RunResult):
 class DrivenTest:
     """Base of the displacement-driven protocols (see the module docstring).
 
-    A subclass is a frozen dataclass that redeclares a field below only to change its
-    default, adds its own fields, and defines ``protocol``, ``rate_curve`` (x and y
-    columns compared by ``check_rate``), ``rate_keys`` (summary keys compared by
-    ``check_rate``: {report name: key}), :meth:`travel_m`, :meth:`input_text` and
-    :meth:`reduce`; :meth:`check_fields` validates its own fields when it is built.
+    A subclass is a frozen dataclass with its own fields, then the fields below whose
+    default it changes (redeclared); it sets the class constants ``protocol``,
+    ``rate_curve`` (x and y columns compared by ``check_rate``), ``rate_keys`` (summary
+    keys compared by ``check_rate``: {report name: key}) and others declared here (plain
+    assignments: the ``ClassVar`` declarations here keep them out of the fields), and
+    defines :meth:`travel_m`, :meth:`input_text` and :meth:`reduce`;
+    :meth:`check_fields` validates its own fields when it is built.
 
     Args:
         speed_fraction: speed of the driven boundary (clamp, corner, box face, punch)
@@ -355,7 +357,7 @@ class ClampedTest(RelaxedDrivenTest):
 
     drag: str = "affine"
 
-    quasi_static_note: ClassVar[str] = (
+    quasi_static_note = (
         "kinetic energy of the free fabric over the bond strain energy and over the work "
         "done so far, after the smooth start and the first tenth of the displacement")
 

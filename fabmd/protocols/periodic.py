@@ -125,17 +125,16 @@ class PeriodicTension(_PeriodicCellTest):
         report_strains_pct: strains at which N_xx is reported.
     """
 
-    protocol: ClassVar[str] = "periodic_tension"
-    title: ClassVar[str] = "uniaxial tension along x"
-    rate_curve: ClassVar[tuple[str, str]] = ("strain_pct", "force_per_width_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
-        "initial_stiffness_change": "initial_stiffness_n_m_per_width"}
+    protocol = "periodic_tension"
+    title = "uniaxial tension along x"
+    rate_curve = ("strain_pct", "force_per_width_n_m")
+    rate_keys = {"initial_stiffness_change": "initial_stiffness_n_m_per_width"}
 
-    speed_fraction: float = 2e-4
     max_strain_pct: float = 2.0
     transverse: str = "held"
     transverse_damping_fraction: float = 0.1
     report_strains_pct: tuple[float, ...] = (0.5, 1.0)
+    speed_fraction: float = 2e-4
 
     def check_fields(self) -> None:
         inputs.in_range("periodic_tension.max_strain_pct", self.max_strain_pct, 0, 50,
@@ -232,15 +231,14 @@ class PeriodicShear(_PeriodicCellTest):
         report_angles_deg: shear angles at which forces are reported.
     """
 
-    protocol: ClassVar[str] = "periodic_shear"
-    title: ClassVar[str] = "trellis shear"
-    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
-        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
+    protocol = "periodic_shear"
+    title = "trellis shear"
+    rate_curve = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys = {"initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
 
-    speed_fraction: float = 1e-3
     max_shear_angle_deg: float = 40.0
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
+    speed_fraction: float = 1e-3
 
     def check_fields(self) -> None:
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,

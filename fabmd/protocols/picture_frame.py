@@ -30,7 +30,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
 
 import numpy as np
 
@@ -122,14 +121,13 @@ class PictureFrame(ClampedTest):
             from it (> 1).
     """
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
-    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
+    protocol = PROTOCOL
+    interval_axis = ("shear_angle_deg", 5.0)
+    rate_curve = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys = {
         "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
         "locking_angle_change": "locking_angle_deg"}
 
-    speed_fraction: float = 1e-3
     max_shear_angle_deg: float = 60.0
     max_displacement_m: float | None = None
     frame_length_m: float | None = None
@@ -139,6 +137,7 @@ class PictureFrame(ClampedTest):
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
     locking_initial_deg: tuple[float, float] = (5.0, 15.0)
     locking_factor: float = 2.0
+    speed_fraction: float = 1e-3
 
     def check_fields(self) -> None:
         inputs.in_range("picture_frame.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,

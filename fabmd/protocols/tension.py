@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
 
 import numpy as np
 
@@ -43,10 +42,10 @@ class Tension(ClampedTest):
         report_elongations_pct: elongations at which forces are reported.
     """
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("elongation_pct", 0.25)
-    rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
-    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n"}
+    protocol = PROTOCOL
+    interval_axis = ("elongation_pct", 0.25)
+    rate_curve = ("elongation_pct", "force_n")
+    rate_keys = {"initial_stiffness_change": "initial_stiffness_n"}
 
     max_elongation_pct: float = 3.0
     clamp_length_m: float | None = None
