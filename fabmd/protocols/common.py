@@ -12,11 +12,14 @@ from ..describe import scene_dict  # noqa: F401 - protocols take it from here
 from ..engine import Engine, EngineResult, mpi
 from ..engine.library import REQUIRED_PACKAGES
 from ..engine.run_script import run_sh_text
-from ..errors import OverlapWarning
+from ..errors import OverlapWarning, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..model.contact import ContactModel
 from ..results.folder import prepare_run_folder, read_print_file, write_csv, write_json
+from ..results.trajectory import finalise, salvage
 from ..scene.blocks import OVERLAP_FILE, TOOL_OVERLAP_WARNING
+from ..scene.outputs import TrajectoryOutput
+from ..scene.plan import RunPlan
 
 DATA_FILE = "model.data"
 
@@ -113,11 +116,39 @@ def resume_folder(out: Path | None) -> Path:
     return Path(out).resolve()
 
 
-def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = False
-               ) -> EngineResult:
+def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = False,
+               **options) -> EngineResult:
     """Run the protocol's input in ``run_dir`` with ``engine`` (``resume``: from its
-    checkpoint)."""
-    return engine.run(run_dir, input_name(protocol), label=protocol, resume=resume)
+    checkpoint; ``options``: more keywords of :meth:`Engine.run`, e.g. ``monitor``)."""
+    return engine.run(run_dir, input_name(protocol), label=protocol, resume=resume, **options)
+
+
+def open_run_folder(out: Path | None, protocol: str, model: BeadModel, input_text: str,
+                    scene: dict, overwrite: bool = False, resume: bool = False,
+                    plan: RunPlan | None = None) -> Path:
+    """The run folder: ``out`` to resume from its checkpoint (``resume``), else a new one
+    (:func:`write_run_folder`) with the run's ``plan`` in ``plan.json``."""
+    if resume:
+        return resume_folder(out)
+    run_dir = write_run_folder(out, protocol, model, input_text, scene, overwrite=overwrite)
+    if plan is not None and mpi.is_root():
+        plan.write(run_dir)
+    return run_dir
+
+
+def run_with_trajectory(engine: Engine, run_dir: Path, protocol: str,
+                        trajectory: TrajectoryOutput, model: BeadModel, resume: bool = False,
+                        **options) -> tuple[EngineResult, Path | None]:
+    """:func:`run_folder`, then the run's trajectory converted
+    (:func:`fabmd.results.trajectory.finalise`, every rank); a failed run keeps the frames
+    up to the failure (``salvage``) and raises. Returns the engine's result and the
+    trajectory file (None: none written)."""
+    try:
+        run = run_folder(engine, run_dir, protocol, resume, **options)
+    except SimulationFailed:
+        salvage(run_dir, paraview=trajectory.paraview, model=model)
+        raise
+    return run, finalise(run_dir, paraview=trajectory.paraview, model=model)
 
 
 def overlap_summary(run_dir: Path, contact_model: ContactModel | None = None,

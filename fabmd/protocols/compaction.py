@@ -45,14 +45,7 @@ from ..scene import blocks
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.templates import render
 from ..units import quantity
-from .common import (
-    DATA_FILE,
-    input_name,
-    overlap_summary,
-    resume_folder,
-    scene_dict,
-    write_run_folder,
-)
+from .common import DATA_FILE, open_run_folder, overlap_summary, run_folder, scene_dict
 from .driven import DrivenResult, shared_result
 from .periodic import check_periodic_cell
 
@@ -213,17 +206,11 @@ class Compaction:
         if check_rate:
             raise InputError("compaction has no --check-rate; rerun with half "
                              "speed_fraction to check the rate")
-        engine = engine or Engine()
         text = self.input_text(model)  # validates before anything is written
-        if resume:
-            run_dir = resume_folder(out)
-        else:
-            run_dir = write_run_folder(out, self.protocol, model, text,
-                                       {self.protocol: scene_dict(self)}, overwrite=overwrite)
-            if mpi.is_root():
-                self.plan(model).write(run_dir)
-        run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
-                         resume=resume)
+        run_dir = open_run_folder(out, self.protocol, model, text,
+                                  {self.protocol: scene_dict(self)}, overwrite, resume,
+                                  plan=self.plan(model))
+        run = run_folder(engine or Engine(), run_dir, self.protocol, resume=resume)
         result = None
         if mpi.is_root():
             result = self.reduce(Path(run_dir), model)

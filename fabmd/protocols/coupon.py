@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError, QuasiStaticWarning, SimulationFailed
+from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.bending import add_bending
@@ -28,16 +28,15 @@ from ..model.transform import cut, tile
 from ..results.folder import write_json
 from ..results.measure import fabric_measures
 from ..results.run_record import read_run_end
-from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render, render_inline
 from .common import (
     DATA_FILE,
+    open_run_folder,
     overlap_summary,
-    resume_folder,
-    run_folder,
+    run_with_trajectory,
     scene_dict,
     write_run_folder,
 )
@@ -173,18 +172,10 @@ class Coupon:
                 write_json(Path(run_dir) / "summary.json", {"relaxed": False})  # done mark
             return CouponResult(Path(run_dir), geometry, {"relaxed": False})
         text = self.input_text(geometry)
-        if resume:
-            run_dir = resume_folder(out)
-        else:
-            run_dir = write_run_folder(out, PROTOCOL, geometry, text,
-                                       {"coupon": scene_dict(self)}, overwrite=overwrite)
-        paraview = self.trajectory.paraview
-        try:
-            run_folder(engine or Engine(), run_dir, PROTOCOL, resume=resume)
-        except SimulationFailed:
-            salvage(run_dir, paraview=paraview, model=geometry)  # the frames up to the failure
-            raise
-        trajectory = finalise(run_dir, paraview=paraview, model=geometry)
+        run_dir = open_run_folder(out, PROTOCOL, geometry, text, {"coupon": scene_dict(self)},
+                                  overwrite, resume)
+        _, trajectory = run_with_trajectory(engine or Engine(), run_dir, PROTOCOL,
+                                            self.trajectory, geometry, resume)
         summary = None
         if mpi.is_root():
             relaxed = BeadModel.load(Path(run_dir) / f"{COUPON}.data", Path(run_dir) / "model.json")

@@ -31,7 +31,7 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import InputError, QuasiStaticWarning, SimulationFailed
+from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
@@ -42,21 +42,13 @@ from ..results.measure import areal_density_kg_m2, fabric_measures, passed_throu
 from ..results.plots import plot_curves
 from ..results.preview import preview_png
 from ..results.run_record import RunEnd, read_run_end
-from ..results.trajectory import finalise, salvage
 from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import Damping, QuasiStatic
 from ..scene.templates import render
-from .common import (
-    DATA_FILE,
-    overlap_summary,
-    resume_folder,
-    run_folder,
-    scene_dict,
-    write_run_folder,
-)
+from .common import DATA_FILE, open_run_folder, overlap_summary, run_with_trajectory, scene_dict
 
 PROTOCOL = "crimp"
 CRIMPED = "crimped"
@@ -245,21 +237,11 @@ class Crimp:
                 warnings.warn(message, UserWarning, stacklevel=2)
         model = with_room_in_z(model)
         text = self.input_text(model)  # validates before anything is written
-        if resume:
-            run_dir = resume_folder(out)
-        else:
-            run_dir = write_run_folder(out, PROTOCOL, model, text,
-                                       {"crimp": scene_dict(self), "model": model.metadata()},
-                                       overwrite=overwrite)
-            if mpi.is_root():
-                self.plan(model).write(run_dir)
-        paraview = self.trajectory.paraview
-        try:
-            run = run_folder(engine, run_dir, PROTOCOL, resume=resume)
-        except SimulationFailed:
-            salvage(run_dir, paraview=paraview, model=model)  # the frames up to the failure
-            raise
-        trajectory = finalise(run_dir, paraview=paraview, model=model)
+        run_dir = open_run_folder(out, PROTOCOL, model, text,
+                                  {"crimp": scene_dict(self), "model": model.metadata()},
+                                  overwrite, resume, plan=self.plan(model))
+        run, trajectory = run_with_trajectory(engine, run_dir, PROTOCOL, self.trajectory, model,
+                                              resume)
         summary = None
         crimped = None
         if mpi.is_root():

@@ -13,22 +13,25 @@ writes, through ``lammps_templates/driven_outputs.lmp``:
 * the trajectory (``trajectory.h5``, ParaView files; :mod:`fabmd.scene.outputs`)
   with frames on output steps and the last step as the last frame.
 
-:class:`DrivenTest` is a mixin for the protocols' frozen dataclasses: it turns
-their ``speed_fraction``, ``ramp_fraction``, ``damping_time_s``, ``contact``,
-``time_step``, ``samples`` and ``trajectory`` fields plus the protocol's travel into
-the loading, the time step, the output interval and the step count, and its :meth:`run`
+:class:`DrivenTest` is the keyword-only frozen dataclass the protocols derive from: it
+declares the fields every driven test has (``speed_fraction``, ``ramp_fraction``,
+``damping_time_s``, ``contact``, ``time_step``, ``samples``, ``trajectory``; a protocol
+only redeclares the ones whose default differs) and turns them plus the protocol's travel
+into the loading, the time step, the output interval and the step count; its :meth:`run`
 writes the run folder, runs it with the contact-power monitor, converts the
-trajectory (after a failed run too: the frames up to the failure), reduces it, and
-with ``check_rate`` reruns at half speed and reports how much the curve moved.
-:func:`read_outputs`, :func:`energy_columns`, :func:`kinetic_ratio` assemble the
-quasi-static evidence the same way for every protocol.
+trajectory (after a failed run too: the frames up to the failure), reduces it, judges it
+(:mod:`fabmd.protocols.verdict`), and with ``check_rate`` reruns at half speed and
+reports how much the curve moved. :class:`RelaxedDrivenTest` adds the free relaxation
+before the loading (``relax``), :class:`ClampedTest` the drag choice of the coupon tests
+(``drag``). :func:`read_outputs`, :func:`energy_columns` and
+:meth:`DrivenTest.quasi_static_evidence` assemble the quasi-static evidence the same way
+for every protocol.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
@@ -37,32 +40,25 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
-from ..errors import QuasiStaticWarning, SimulationFailed
 from ..model.bead_model import BeadModel
-from ..model.beads import model_bead_parameters
+from ..model.beads import TimeStep, model_bead_parameters
+from ..model.contact import ContactModel
 from ..model.timestep import stable_time_step_s
 from ..results.curves import curve_difference
 from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
-from ..results.trajectory import finalise, salvage
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.energy import ContactPower, balance, cumulative
 from ..scene.loading import SmoothStartSpeed
-from ..scene.outputs import check_trajectory
+from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
-from ..scene.quasi_static import interval_columns, interval_verdict, relaxation_settled
+from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render
-from .common import DATA_FILE, RunResult, input_name, resume_folder, scene_dict, write_run_folder
-
-#: above these a driven test's curve is not quasi-static (after start-up): kinetic over
-#: strain energy and over the work done (inertia; KE/U = 0.1 moved the tension force at 1 %
-#: by about 1 %, benchmarks/stability.py "Loading speed"), and the share of the work the
-#: viscous drag took (a force that grows with the loading speed); and the energy balance's
-#: closing error (work that went somewhere no term accounts for)
-QUASI_STATIC_LIMITS = {"max_kinetic_to_strain_energy": 0.1,
-                       "max_kinetic_to_external_work": 0.1, "damping_share": 0.5,
-                       "energy_balance_error": 0.05, "start_spike_ratio": 1.0}
+from .common import DATA_FILE, RunResult, open_run_folder, run_with_trajectory, scene_dict
+from .verdict import QUASI_STATIC_LIMITS, judge
+from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
+from .verdict import start_spike_ratio as start_spike_ratio  # its old home
 
 
 @dataclass
@@ -82,14 +78,39 @@ class DrivenResult(RunResult):
             plot_curves(self.run_dir / spec.pop("path"), **spec)
 
 
+@dataclass(frozen=True, kw_only=True)
 class DrivenTest:
-    """Mixin of the displacement-driven protocols (see the module docstring).
+    """Base of the displacement-driven protocols (see the module docstring).
 
-    A subclass is a frozen dataclass with the fields named above and defines
-    ``protocol``, ``rate_curve`` (x and y columns compared by ``check_rate``),
-    ``rate_keys`` (summary keys compared by ``check_rate``: {report name: key}),
-    :meth:`travel_m`, :meth:`input_text` and :meth:`reduce`.
+    A subclass is a frozen dataclass with its own fields, then the fields below whose
+    default it changes (redeclared); it sets the class constants ``protocol``,
+    ``rate_curve`` (x and y columns compared by ``check_rate``), ``rate_keys`` (summary
+    keys compared by ``check_rate``: {report name: key}) and others declared here (plain
+    assignments: the ``ClassVar`` declarations here keep them out of the fields), and
+    defines :meth:`travel_m`, :meth:`input_text` and :meth:`reduce`;
+    :meth:`check_fields` validates its own fields when it is built.
+
+    Args:
+        speed_fraction: speed of the driven boundary (clamp, corner, box face, punch)
+            over the fibres' axial wave speed, in (0, 0.05] (quasi-static when small;
+            check with ``check_rate``).
+        ramp_fraction: share of the test spent reaching full speed smoothly, in [0, 0.9].
+        damping_time_s: τ of the drag γ = m/τ on the free beads [s] (default: a tenth
+            of the test).
+        contact: fibre–fibre contact.
+        time_step: time-step policy.
+        samples: curve points (>= 10).
+        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
+            ``TrajectoryOutput(frames=0)`` writes none).
     """
+
+    speed_fraction: float = 1e-4
+    ramp_fraction: float = 0.1
+    damping_time_s: float | None = None
+    contact: ContactModel = field(default_factory=ContactModel)
+    time_step: TimeStep = field(default_factory=TimeStep)
+    samples: int = 200
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
     protocol: ClassVar[str] = ""
     rate_curve: ClassVar[tuple[str, str]] = ("", "")
@@ -98,6 +119,10 @@ class DrivenTest:
     quasi_static_limits: ClassVar[dict[str, float]] = QUASI_STATIC_LIMITS
     #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
     interval_axis: ClassVar[tuple[str, float] | None] = None
+    #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
+    quasi_static_note: ClassVar[str] = ("kinetic energy over the bond strain energy and over "
+                                        "the work done so far, after the smooth start and "
+                                        "the first tenth of the test")
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -117,6 +142,20 @@ class DrivenTest:
 
     def make_monitor(self) -> ContactPower:
         return ContactPower()
+
+    def quasi_static_evidence(self, out: Outputs, model: BeadModel, progress: np.ndarray,
+                              work_ratio: bool = True) -> dict:
+        """The summary's quasi-static evidence: the largest kinetic / strain energy and
+        (``work_ratio``) kinetic energy / work done after start-up (:func:`started_mask`;
+        ``progress`` of the test in [0, 1]), what they cover (``quasi_static_note``;
+        :data:`STARTED_NOTE` without ``work_ratio``) and the energy balance."""
+        started = started_mask(out, self.loading(model), progress)
+        evidence = {"max_kinetic_to_strain_energy": kinetic_ratio(out, started)}
+        if work_ratio:
+            evidence["max_kinetic_to_external_work"] = kinetic_to_work_ratio(out, started)
+        note = self.quasi_static_note if work_ratio else STARTED_NOTE
+        evidence.update(quasi_static_note=note, energy_balance=energy_balance(out))
+        return evidence
 
     # -- loading and time ------------------------------------------------------------
     def wave_speed_m_s(self, model: BeadModel) -> float:
@@ -201,14 +240,26 @@ class DrivenTest:
         velocity (``"absolute"``); :mod:`fabmd.scene.drag`."""
         return drag_commands(getattr(self, "drag", "absolute"), "free", self.gamma(model), field)
 
+    def __post_init__(self):
+        self.check_fields()
+        self.check_loading()
+
+    def check_fields(self) -> None:
+        """Validate the protocol's own fields (errors name ``<protocol>.<field>``)."""
+
+    def check_positive_or_none(self, *names: str) -> None:
+        """Each field in ``names`` None (the default is derived) or > 0."""
+        for name in names:
+            if getattr(self, name) is not None:
+                inputs.positive(f"{self.protocol}.{name}", getattr(self, name))
+
     def check_loading(self) -> None:
         """Validate the fields every driven test has (speed, ramp, damping time, samples,
         trajectory); errors name ``<protocol>.<field>``."""
         name = self.protocol
         inputs.in_range(f"{name}.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
         inputs.in_range(f"{name}.ramp_fraction", self.ramp_fraction, 0, 0.9)
-        if self.damping_time_s is not None:
-            inputs.positive(f"{name}.damping_time_s", self.damping_time_s)
+        self.check_positive_or_none("damping_time_s")
         inputs.positive_int(f"{name}.samples", self.samples, minimum=10)
         check_trajectory(f"{name}.trajectory", self.trajectory)
         if hasattr(self, "drag"):
@@ -281,22 +332,13 @@ class DrivenTest:
         engine = engine or Engine()
         start = self.prepare(model)
         text = self.input_text(start)  # validates before anything is written
-        if resume:
-            run_dir = resume_folder(out)
-        else:
-            run_dir = write_run_folder(out, self.protocol, start, text,
-                                       {self.protocol: scene_dict(self)}, overwrite=overwrite)
-            if mpi.is_root():
-                self.plan(start).write(run_dir)
+        run_dir = open_run_folder(out, self.protocol, start, text,
+                                  {self.protocol: scene_dict(self)}, overwrite, resume,
+                                  plan=self.plan(start))
         monitor = monitor or self.make_monitor()
-        paraview = self.trajectory.paraview
-        try:
-            run = engine.run(run_dir, input_name(self.protocol), label=self.protocol,
-                             monitor=monitor, monitor_every=self.every(start), resume=resume)
-        except SimulationFailed:
-            salvage(run_dir, paraview=paraview, model=start)  # the frames up to the failure
-            raise
-        trajectory = finalise(run_dir, paraview=paraview, model=start)
+        run, trajectory = run_with_trajectory(engine, run_dir, self.protocol, self.trajectory,
+                                              start, resume, monitor=monitor,
+                                              monitor_every=self.every(start))
         result = None
         if mpi.is_root():
             result = self.reduce(run_dir, start, monitor)
@@ -304,22 +346,8 @@ class DrivenTest:
                                   trajectory=trajectory.name if trajectory else None)
             if getattr(self, "relax", None) is not None and not resume:  # starts relaxing
                 result.summary["start_settled"] = relaxation_settled(run_dir / "log.lammps")
-            spike = start_spike_ratio(result.curve.get(self.rate_curve[1]))
-            if spike is not None:
-                result.summary["start_spike_ratio"] = spike
-            if self.interval_axis is not None:
-                add_interval_verdict(result, *self.interval_axis)
-            verdict = quasi_static_verdict(result.summary, self.quasi_static_limits)
-            result.summary["quasi_static"] = verdict
-            if not verdict["ok"]:
-                mark_plots(result, verdict, self.interval_axis)
-                where = ("; trust only " + ", ".join(f"{a:g}-{b:g}" for a, b in
-                                                     verdict["trusted"])
-                         if verdict.get("partly") else ": do not use the curve")
-                warnings.warn(f"{self.protocol} in {run_dir}: not quasi-static "
-                              f"({'; '.join(verdict['problems'])}){where}; "
-                              f"{'; '.join(verdict['remedies'])}", QuasiStaticWarning,
-                              stacklevel=2)
+            judge(result, self.protocol, run_dir, self.quasi_static_limits,
+                  self.interval_axis, self.rate_curve[1])
         if check_rate:
             slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
             other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
@@ -343,120 +371,42 @@ class DrivenTest:
         return report
 
 
-def damping_share(summary: dict) -> float | None:
-    """Share of the external work the viscous drag dissipated."""
-    balance_ = summary.get("energy_balance") or {}
-    work, drag = balance_.get("external_work_j"), balance_.get("damping_dissipation_j")
-    return drag / work if work and drag is not None and work > 0 else None
+@dataclass(frozen=True, kw_only=True)
+class RelaxedDrivenTest(DrivenTest):
+    """A driven test whose specimen first relaxes free, the driven boundary held.
+
+    Args:
+        relax: stop criterion of the free relaxation before the test (clamps held).
+    """
+
+    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
 
 
-def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) -> dict:
-    """Is the curve quasi-static, and does its energy balance close? Each measure in
-    ``limits`` (default
-    :data:`QUASI_STATIC_LIMITS`) is read from the summary (``damping_share`` computed from
-    its energy balance); a measure the test does not report is not judged. A summary whose
-    ``start_settled`` is False (the relaxation before the loading did not settle) fails.
-    With a per-interval verdict (``quasi_static_intervals``, :func:`add_interval_verdict`)
-    every failed interval is a problem too; ``partly`` is True when only intervals failed
-    and some passed (``trusted``: their ranges), so the rest of the curve can be used."""
-    limits = QUASI_STATIC_LIMITS if limits is None else limits
-    derived = {"damping_share": lambda: damping_share(summary),
-               "energy_balance_error": lambda: (summary.get("energy_balance") or {}).get(
-                   "relative_error")}
-    values = {name: derived[name]() if name in derived else summary.get(name)
-              for name in limits}
-    problems = [f"{name} = {v:.2g} > {limits[name]:g}" for name, v in values.items()
-                if v is not None and v > limits[name]]
-    failed = [name for name, v in values.items() if v is not None and v > limits[name]]
-    if summary.get("start_settled") is False:
-        problems.append("the specimen was still moving when the loading started (its "
-                        "relaxation did not settle within relax.max_steps)")
-        failed.append("start_settled")
-    intervals = summary.get("quasi_static_intervals")
-    whole_run_ok = not problems
-    trusted = flagged = []
-    if intervals:
-        trusted, flagged = intervals["trusted"], intervals["flagged"]
-        interval_problems = [p for i in intervals["intervals"] for p in i["problems"]]
-        problems += interval_problems
-        if interval_problems:
-            failed.append("interval")
-    remedies = list(dict.fromkeys(f"{name}: {QUASI_STATIC_REMEDIES.get(name, GENERIC_REMEDY)}"
-                                  for name in failed))
-    return {"ok": not problems, "values": values, "limits": dict(limits),
-            "problems": problems, "remedies": remedies, "flagged": flagged,
-            "trusted": trusted, "partly": bool(whole_run_ok and flagged and trusted)}
+@dataclass(frozen=True, kw_only=True)
+class ClampedTest(RelaxedDrivenTest):
+    """A coupon held by moving clamps (tension, bias extension, picture frame).
 
+    Args:
+        drag: ``"affine"`` (default): the drag acts on the motion relative to the
+            clamps' affine velocity field (what the protocol's docstring says it holds),
+            so it does not add to the clamp force; ``"absolute"``: on the absolute
+            velocity. :mod:`fabmd.scene.drag`.
+    """
 
-GENERIC_REMEDY = "lower speed_fraction, or check the specimen holds together"
-#: what to change when a quasi-static measure fails (scene-file fields of the test table)
-QUASI_STATIC_REMEDIES = {
-    "max_kinetic_to_strain_energy": "inertia: lower speed_fraction",
-    "max_kinetic_to_external_work": "inertia: lower speed_fraction",
-    "mean_inertial_to_punch_force": "inertia: lower speed_fraction",
-    "damping_share": "the drag takes the work: raise damping_time_s (less drag), or "
-                     "lower speed_fraction",
-    "energy_balance_error": "the energy does not balance (time step or contact): lower "
-                            "time_step.factor, or raise the contact stiffness_factor; a "
-                            "lower speed_fraction does not cure it",
-    "start_spike_ratio": "the force jumps when the loading starts, before the clamps have "
-                         "moved (strain energy stored in the start state is released; a "
-                         "fibre far stiffer than the rest makes this likely): relax the start "
-                         "state further (lower relax.force_ratio and relax.kinetic_ratio, "
-                         "raise relax.max_steps); a lower speed_fraction does not cure it",
-    "start_settled": "the specimen was not at rest when the loading started: raise "
-                     "relax.max_steps (or lower relax.kinetic_ratio); a lower speed_fraction "
-                     "does not cure it",
-    "interval": "part of the curve is not quasi-static (the flagged intervals): lower "
-                "speed_fraction, or use only the trusted ranges",
-}
+    drag: str = "affine"
 
+    quasi_static_note = (
+        "kinetic energy of the free fabric over the bond strain energy and over the work "
+        "done so far, after the smooth start and the first tenth of the displacement")
 
-def start_spike_ratio(force, fraction: float = 0.05) -> float | None:
-    """Largest |force| in the first ``fraction`` of the samples (the first excluded: it is
-    printed before any force) over the largest after them; above 1 the force jumps when
-    the loading starts, before the clamps have moved: the start state was not in
-    equilibrium. None for curves too short to tell."""
-    if force is None:
-        return None
-    f = np.abs(np.asarray(force, float))
-    head = max(2, int(round(fraction * len(f))) + 1)
-    if len(f) < head + 2:
-        return None
-    later = float(f[head:].max())
-    early = float(f[1:head].max())
-    return early / max(later, 1e-300) if early > 0 else 0.0
-
-
-def add_interval_verdict(result: DrivenResult, column: str, width: float) -> dict:
-    """Judge ``result``'s curve per interval of ``column`` (:func:`~fabmd.scene.
-    quasi_static.interval_verdict`): the verdict goes into the summary
-    (``quasi_static_intervals``), its per-sample columns into the curve."""
-    c = result.curve
-    verdict = interval_verdict(c[column], c["external_work_j"], c["damping_dissipation_j"],
-                               c["kinetic_energy_j"], c["strain_energy_j"], width,
-                               name=column)
-    result.summary["quasi_static_intervals"] = verdict
-    result.curve.update(interval_columns(c[column], verdict))
-    return verdict
-
-
-def mark_plots(result: DrivenResult, verdict: dict,
-               interval_axis: tuple[str, float] | None) -> None:
-    """Say on every plot that the curve is not (or only partly) quasi-static: a
-    whole-run failure in the title, failed intervals shaded (a plot spec whose x is not
-    the interval column names its own: ``x_column``, ``x_scale``)."""
-    for spec in getattr(result, "plots", []):
-        if verdict.get("partly") and interval_axis is not None:
-            column = spec.get("x_column", interval_axis[0])
-            scale = spec.get("x_scale", 1.0)
-            axis = result.curve[interval_axis[0]]
-            spec["spans"] = [[scale * float(np.interp(v, axis, result.curve[column]))
-                              for v in ab] for ab in verdict["flagged"]]
-            spec["title"] = "PARTLY NOT QUASI-STATIC (shaded): " + spec.get("title", "")
-        else:  # no plot that looks valid
-            spec["title"] = "NOT QUASI-STATIC, do not use: " + spec.get("title", "")
-        spec["notes"] = "\n".join([spec.get("notes", ""), *verdict["problems"][:4]])
+    @staticmethod
+    def clamp_edges(x: np.ndarray, low_m: float, high_m: float) -> tuple[float, float]:
+        """The clamp edges ``low_m`` (beads at or below it clamped) and ``high_m`` (at or
+        above) along the bead coordinates ``x``, each moved midway between two beads, so
+        that LAMMPS's region test and Python's cannot disagree on a bead on an edge [m]."""
+        low = 0.5 * (x[x <= low_m].max() + x[x > low_m].min())
+        high = 0.5 * (x[x < high_m].max() + x[x >= high_m].min())
+        return float(low), float(high)
 
 
 def shared_result(result: DrivenResult | None, run_dir: Path) -> DrivenResult:

@@ -33,25 +33,13 @@ import numpy as np
 from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from ..model.beads import TimeStep
-from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
 from ..results.figure import report_marks
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
-from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render, render_inline
-from .driven import (
-    DrivenResult,
-    DrivenTest,
-    energy_balance,
-    energy_columns,
-    kinetic_ratio,
-    kinetic_to_work_ratio,
-    read_outputs,
-    started_mask,
-)
+from .driven import DrivenResult, RelaxedDrivenTest, energy_columns, read_outputs
 from .picture_frame import interval_force
 
 TRANSVERSE = ("held", "free")
@@ -64,9 +52,14 @@ def check_periodic_cell(model: BeadModel, who: str) -> None:
                          f"{tuple(model.periodic)}; use the coupon tests for finite pieces")
 
 
-@dataclass(frozen=True)
-class _PeriodicCellTest(DrivenTest):
-    """Box-deformation test of a periodic cell (shared machinery)."""
+@dataclass(frozen=True, kw_only=True)
+class _PeriodicCellTest(RelaxedDrivenTest):
+    """Box-deformation test of a periodic cell (shared machinery): the loading, contact,
+    output and ``relax`` fields of :class:`~fabmd.protocols.driven.RelaxedDrivenTest`,
+    ``speed_fraction`` that of the moving box face, fewer curve points and frames."""
+
+    samples: int = 100
+    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
 
     title: ClassVar[str] = ""
 
@@ -109,7 +102,6 @@ class _PeriodicCellTest(DrivenTest):
         return {"displacement": load.lammps_displacement(), "velocity": load.lammps_velocity()}
 
     def _common_summary(self, model: BeadModel, out, progress, plan: RunPlan) -> dict:
-        started = started_mask(out, plan.loading, progress)
         lx, ly, lz = self.cell(model)
         return {
             "protocol": self.protocol,
@@ -118,16 +110,11 @@ class _PeriodicCellTest(DrivenTest):
             "time_step_s": plan.time_step_s,
             "steps": plan.steps,
             "boundary_speed_m_s": plan.loading.speed_m_s,
-            "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
-            "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
-            "quasi_static_note": "kinetic energy over the bond strain energy and over the "
-                                 "work done so far, after the smooth start and the first "
-                                 "tenth of the test",
-            "energy_balance": energy_balance(out),
+            **self.quasi_static_evidence(out, model, progress),
         }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PeriodicTension(_PeriodicCellTest):
     """Uniaxial tension of a periodic cell along x by box deformation.
 
@@ -136,39 +123,26 @@ class PeriodicTension(_PeriodicCellTest):
         transverse: ``"held"`` (ly fixed) or ``"free"`` (zero transverse membrane force,
             ``fix press/berendsen`` on y; its box work is not in the energy balance).
         transverse_damping_fraction: Berendsen time constant over the test duration.
-        speed_fraction: speed of the moving box face over the fibres' axial wave speed.
-        ramp_fraction, damping_time_s, contact, time_step, samples, relax: as for tension.
-        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
-            ``TrajectoryOutput(frames=0)`` writes none).
         report_strains_pct: strains at which N_xx is reported.
     """
+
+    protocol = "periodic_tension"
+    title = "uniaxial tension along x"
+    rate_curve = ("strain_pct", "force_per_width_n_m")
+    rate_keys = {"initial_stiffness_change": "initial_stiffness_n_m_per_width"}
 
     max_strain_pct: float = 2.0
     transverse: str = "held"
     transverse_damping_fraction: float = 0.1
-    speed_fraction: float = 2e-4
-    ramp_fraction: float = 0.1
-    damping_time_s: float | None = None
-    contact: ContactModel = field(default_factory=ContactModel)
-    time_step: TimeStep = field(default_factory=TimeStep)
-    samples: int = 100
-    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
     report_strains_pct: tuple[float, ...] = (0.5, 1.0)
-    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    speed_fraction: float = 2e-4
 
-    protocol: ClassVar[str] = "periodic_tension"
-    title: ClassVar[str] = "uniaxial tension along x"
-    rate_curve: ClassVar[tuple[str, str]] = ("strain_pct", "force_per_width_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
-        "initial_stiffness_change": "initial_stiffness_n_m_per_width"}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         inputs.in_range("periodic_tension.max_strain_pct", self.max_strain_pct, 0, 50,
                         low_open=True)
         inputs.one_of("periodic_tension.transverse", self.transverse, TRANSVERSE)
         inputs.in_range("periodic_tension.transverse_damping_fraction",
                         self.transverse_damping_fraction, 0, 1, low_open=True)
-        self.check_loading()
 
     def travel_m(self, model: BeadModel) -> float:
         return self.cell(model)[0] * self.max_strain_pct / 100
@@ -232,41 +206,29 @@ class PeriodicTension(_PeriodicCellTest):
         return DrivenResult(Path(run_dir), curve, summary, [plot])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PeriodicShear(_PeriodicCellTest):
     """Trellis (pure) shear of a periodic cell: both fibre families keep their length.
+    ``speed_fraction`` is that of the turning cell edge (b·γ̇); the trajectory stores the
+    box tilt of the sheared cell too.
 
     Args:
         max_shear_angle_deg: shear angle γ at the end [deg], (0, 70].
-        speed_fraction: speed of the turning cell edge (b·γ̇) over the fibres' axial
-            wave speed.
-        ramp_fraction, damping_time_s, contact, time_step, samples, relax: as for tension.
-        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
-            the box tilt of the sheared cell is stored too).
         report_angles_deg: shear angles at which forces are reported.
     """
 
+    protocol = "periodic_shear"
+    title = "trellis shear"
+    rate_curve = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys = {"initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
+
     max_shear_angle_deg: float = 40.0
-    speed_fraction: float = 1e-3
-    ramp_fraction: float = 0.1
-    damping_time_s: float | None = None
-    contact: ContactModel = field(default_factory=ContactModel)
-    time_step: TimeStep = field(default_factory=TimeStep)
-    samples: int = 100
-    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
-    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    speed_fraction: float = 1e-3
 
-    protocol: ClassVar[str] = "periodic_shear"
-    title: ClassVar[str] = "trellis shear"
-    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
-        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
                         low_open=True)
-        self.check_loading()
 
     def travel_m(self, model: BeadModel) -> float:
         """Arc the turning edge's end travels, b·γ [m]."""

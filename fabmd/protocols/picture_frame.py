@@ -28,9 +28,8 @@ relaxation, and stays shorter for the test.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
 
 import numpy as np
 
@@ -38,28 +37,15 @@ from .. import inputs
 from ..analysis import FabricFrame, family_axes_deg
 from ..errors import InputError
 from ..model.bead_model import BeadModel, BondType
-from ..model.beads import TimeStep, model_bead_parameters
-from ..model.contact import ContactModel
+from ..model.beads import model_bead_parameters
 from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..results.figure import report_marks
 from ..scene import blocks
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
-from ..scene.outputs import TrajectoryOutput
-from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
-from .driven import (
-    DrivenResult,
-    DrivenTest,
-    clamp_power,
-    energy_balance,
-    energy_columns,
-    kinetic_ratio,
-    kinetic_to_work_ratio,
-    read_outputs,
-    started_mask,
-)
+from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
 
 PROTOCOL = "picture_frame"
 
@@ -107,9 +93,17 @@ class FrameGeometry:
     free_side_m: float
 
 
-@dataclass(frozen=True)
-class PictureFrame(DrivenTest):
+@dataclass(frozen=True, kw_only=True)
+class PictureFrame(ClampedTest):
     """Picture-frame shear test of a square coupon (warp along x, weft along y).
+
+    The loading, contact, output, ``relax`` and ``drag`` fields are those of
+    :class:`~fabmd.protocols.driven.ClampedTest`: ``speed_fraction`` is the pulled
+    corner's (default 1e-3: on the example coupon halving it changes the curve by
+    < 0.1 %); the affine drag field is the frame's, so the drag does not add to the frame
+    force (``"absolute"``, the old ``fix viscous``, does); the fibre shear angle of the
+    central zone is measured on the trajectory frames (``TrajectoryOutput(frames=0)``:
+    none written, none measured).
 
     Args:
         max_shear_angle_deg: shear angle at the end of the test [deg], (0, 80].
@@ -121,29 +115,19 @@ class PictureFrame(DrivenTest):
             in [0, 0.05).
         pretension_transits: duration of the preload ramp in axial wave transits of the
             longest fibre.
-        speed_fraction: speed of the pulled corner over the fibres' axial wave speed
-            (default 1e-3: on the example coupon halving it changes the curve by < 0.1 %;
-            check with ``check_rate``).
-        ramp_fraction: share of the test spent reaching full speed smoothly.
-        damping_time_s: τ of the drag γ = m/τ on the free fabric (default: a tenth of
-            the test).
-        drag: ``"affine"`` (default): the drag acts on the motion relative to the frame's
-            affine velocity field, so it does not add to the frame force;
-            ``"absolute"``: on the absolute velocity (the old ``fix viscous``, which the
-            frame force then contains). :mod:`fabmd.scene.drag`.
-        contact: fibre–fibre contact.
-        time_step: time-step policy.
-        samples: curve points.
-        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files);
-            the fibre shear angle of the central zone is measured on them
-            (``TrajectoryOutput(frames=0)``: none written, none measured).
         report_angles_deg: shear angles at which forces are reported.
-        relax: stop criterion of the free relaxation before the test (clamps held).
         locking_initial_deg: shear-angle range [deg] of the initial branch of the
             locking-angle method (:func:`fabmd.results.curves.locking_angle`).
         locking_factor: the force over the initial line that marks the departure
             from it (> 1).
     """
+
+    protocol = PROTOCOL
+    interval_axis = ("shear_angle_deg", 5.0)
+    rate_curve = ("shear_angle_deg", "normalised_force_n_m")
+    rate_keys = {
+        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
+        "locking_angle_change": "locking_angle_deg"}
 
     max_shear_angle_deg: float = 60.0
     max_displacement_m: float | None = None
@@ -151,39 +135,18 @@ class PictureFrame(DrivenTest):
     clamp_width_m: float | None = None
     pretension_strain: float = 0.0
     pretension_transits: float = 20.0
-    speed_fraction: float = 1e-3
-    ramp_fraction: float = 0.1
-    damping_time_s: float | None = None
-    drag: str = "affine"
-    contact: ContactModel = field(default_factory=ContactModel)
-    time_step: TimeStep = field(default_factory=TimeStep)
-    samples: int = 200
-    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
-    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
     locking_initial_deg: tuple[float, float] = (5.0, 15.0)
     locking_factor: float = 2.0
+    speed_fraction: float = 1e-3
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("shear_angle_deg", 5.0)
-    rate_curve: ClassVar[tuple[str, str]] = ("shear_angle_deg", "normalised_force_n_m")
-    rate_keys: ClassVar[dict[str, str]] = {
-        "initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad",
-        "locking_angle_change": "locking_angle_deg"}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         inputs.in_range("picture_frame.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
                         low_open=True)
-        if self.max_displacement_m is not None:
-            inputs.positive("picture_frame.max_displacement_m", self.max_displacement_m)
-        if self.frame_length_m is not None:
-            inputs.positive("picture_frame.frame_length_m", self.frame_length_m)
-        if self.clamp_width_m is not None:
-            inputs.positive("picture_frame.clamp_width_m", self.clamp_width_m)
+        self.check_positive_or_none("max_displacement_m", "frame_length_m", "clamp_width_m")
         inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, 0, 0.05,
                         high_open=True)
         inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
-        self.check_loading()
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
         lo, hi = self.locking_initial_deg
@@ -212,14 +175,8 @@ class PictureFrame(DrivenTest):
         if clamp >= 0.35 * side:
             raise InputError(f"picture_frame.clamp_width_m = {clamp:g} m leaves too little free "
                              f"fabric on a {side:g} m coupon; use at most {0.35 * side:g} m")
-        edges = []
-        for k in range(2):
-            x = p[:, k]
-            a, b = x.min() + clamp, x.max() - clamp
-            # each edge midway between beads, so LAMMPS and Python cannot disagree
-            a = 0.5 * (x[x <= a].max() + x[x > a].min())
-            b = 0.5 * (x[x < b].max() + x[x >= b].min())
-            edges += [float(a), float(b)]
+        edges = [e for k in range(2)
+                 for e in self.clamp_edges(p[:, k], p[:, k].min() + clamp, p[:, k].max() - clamp)]
         centre = (lo + hi) / 2
         pin = centre - frame / 2
         return FrameGeometry(pin_a=(float(pin[0]), float(pin[1])), frame_length_m=float(frame),
@@ -361,7 +318,6 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
              "frame_force_n": force, "shear_force_n": fs, "normalised_force_n_m": fnorm,
              **energy_columns(out)}
     dmax = test.max_displacement(model)
-    started = started_mask(out, plan.loading, d / dmax)
     # by a method that reads the curve only up to a little past locking (not the last part)
     lock = locking_angle(gamma, fnorm, initial_deg=test.locking_initial_deg,
                          factor=test.locking_factor)
@@ -401,12 +357,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
             "fibres_deg": fibre_gamma.tolist(),
             "max_difference_deg": float(np.abs(fibre_gamma - kinematic).max())
             if len(steps) else None},
-        "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
-        "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
-        "quasi_static_note": "kinetic energy of the free fabric over the bond strain energy "
-                             "and over the work done so far, after the smooth start and the "
-                             "first tenth of the displacement",
-        "energy_balance": energy_balance(out),
+        **test.quasi_static_evidence(out, model, d / dmax),
     }
     series = [{"x": gamma, "y": fnorm, "label": "F_norm = F_s L_frame / L_fabric²"}]
     if lock["found"]:

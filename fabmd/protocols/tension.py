@@ -11,84 +11,50 @@ kinetic/strain energy ratio over the run and an energy balance
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
 
 import numpy as np
 
 from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from ..model.beads import TimeStep
-from ..model.contact import ContactModel
 from ..results.curves import bilinear_fit, values_at
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
-from ..scene.outputs import TrajectoryOutput
-from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import fmt, render
-from .driven import (
-    STARTED_NOTE,
-    DrivenResult,
-    DrivenTest,
-    clamp_power,
-    energy_balance,
-    energy_columns,
-    kinetic_ratio,
-    read_outputs,
-    started_mask,
-)
+from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
 
 PROTOCOL = "tension"
 
 
-@dataclass(frozen=True)
-class Tension(DrivenTest):
+@dataclass(frozen=True, kw_only=True)
+class Tension(ClampedTest):
     """Uniaxial tension test of a coupon (length along x).
+
+    The loading, contact, output, ``relax`` and ``drag`` fields are those of
+    :class:`~fabmd.protocols.driven.ClampedTest` (the affine drag field: the clamps'
+    stretch along x).
 
     Args:
         max_elongation_pct: elongation at the end of the test [%] (0, 50].
         clamp_length_m: clamped length at each end [m]; default 10 % of the coupon.
-        speed_fraction: speed of each clamp over the fibres' axial wave speed
-            (quasi-static when small; default 2e-4).
-        ramp_fraction: share of the test spent reaching full speed smoothly.
-        damping_time_s: τ of the drag γ = m/τ (default: a tenth of the test).
-        drag: ``"affine"`` (default): drag on the motion relative to the clamps' affine
-            stretch field; ``"absolute"``: on the absolute velocity. :mod:`fabmd.scene.drag`.
-        contact: fibre–fibre contact.
-        time_step: time-step policy.
-        samples: curve points.
         report_elongations_pct: elongations at which forces are reported.
-        relax: stop criterion of the free relaxation before the test (clamps held).
-        trajectory: trajectory frames over the test (``trajectory.h5``, ParaView files;
-            ``TrajectoryOutput(frames=0)`` writes none).
     """
+
+    protocol = PROTOCOL
+    interval_axis = ("elongation_pct", 0.25)
+    rate_curve = ("elongation_pct", "force_n")
+    rate_keys = {"initial_stiffness_change": "initial_stiffness_n"}
 
     max_elongation_pct: float = 3.0
     clamp_length_m: float | None = None
-    speed_fraction: float = 1e-4
-    ramp_fraction: float = 0.1
-    damping_time_s: float | None = None
-    drag: str = "affine"
-    contact: ContactModel = field(default_factory=ContactModel)
-    time_step: TimeStep = field(default_factory=TimeStep)
-    samples: int = 200
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
-    relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
-    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
 
-    protocol: ClassVar[str] = PROTOCOL
-    interval_axis: ClassVar[tuple[str, float] | None] = ("elongation_pct", 0.25)
-    rate_curve: ClassVar[tuple[str, str]] = ("elongation_pct", "force_n")
-    rate_keys: ClassVar[dict[str, str]] = {"initial_stiffness_change": "initial_stiffness_n"}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         inputs.in_range("tension.max_elongation_pct", self.max_elongation_pct, 0, 50,
                         low_open=True)
-        if self.clamp_length_m is not None:
-            inputs.positive("tension.clamp_length_m", self.clamp_length_m)
-        self.check_loading()
+        self.check_positive_or_none("clamp_length_m")
 
     # -- geometry of the coupon --------------------------------------------------------
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
@@ -102,11 +68,7 @@ class Tension(DrivenTest):
         if 2 * clamp >= 0.8 * length:
             raise InputError(f"tension.clamp_length_m = {clamp:g} m leaves no gauge length on a "
                              f"{length:g} m coupon; use at most {0.4 * length:g} m per end")
-        left, right = float(x.min() + clamp), float(x.max() - clamp)
-        # put each clamp edge midway between beads, so LAMMPS's region test and this
-        # one cannot disagree on a bead that sits on the edge
-        left = 0.5 * (x[x <= left].max() + x[x > left].min())
-        right = 0.5 * (x[x < right].max() + x[x >= right].min())
+        left, right = self.clamp_edges(x, float(x.min() + clamp), float(x.max() - clamp))
         gauge = float(x[x > right].min() - x[x < left].max())
         return float(left), float(right), gauge
 
@@ -166,8 +128,6 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         "force_right_n": -out["force_right_n"],
         **energy_columns(out),
     }
-    # start-up: the smooth start, the first tenth of the elongation and the slack toe
-    started = started_mask(out, plan.loading, elongation / (test.max_elongation_pct / 100))
     fit = bilinear_fit(100 * elongation, force)
     summary = {
         "protocol": PROTOCOL,
@@ -186,11 +146,11 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
                                   values_at(100 * elongation, force,
                                             test.report_elongations_pct).items()},
         "max_force_n": float(force.max()),
-        "max_kinetic_to_strain_energy": kinetic_ratio(out, started),
-        "quasi_static_note": STARTED_NOTE,
         "clamp_force_mismatch": float(np.abs(out["force_left_n"] + out["force_right_n"])[-1]
                                       / max(abs(force[-1]), 1e-300)),
-        "energy_balance": energy_balance(out),
+        # start-up: the smooth start, the first tenth of the elongation and the slack toe
+        **test.quasi_static_evidence(out, coupon, elongation / (test.max_elongation_pct / 100),
+                                     work_ratio=False),
     }
     ke = summary["max_kinetic_to_strain_energy"]
     plot = {"path": "curve.png",
