@@ -197,6 +197,7 @@ def test_tool_zones_skip_only_beads_that_cannot_reach_the_tools(small_blank):
 @pytest.mark.lammps
 def test_blank_holder_force_holds_its_set_value(small_blank, tmp_path):
     from fabmd.engine import Engine
+    from fabmd.scene.plan import read_plan
 
     drape = Drape(**SMALL, trajectory=__import__("fabmd.scene.outputs", fromlist=["x"])
                   .TrajectoryOutput(frames=2, paraview=False))
@@ -207,6 +208,9 @@ def test_blank_holder_force_holds_its_set_value(small_blank, tmp_path):
     assert abs(holder["mean_force_n"] - 20.0) < 0.5
     assert s["max_punch_force_n"] > 0 and s["max_shear_angle_deg"] > 1.0
     assert s["energy_balance"]["relative_error"] < 0.05
+    plan = read_plan(result.run_dir)  # the summary reports the plan the run was written with
+    assert (s["time_step_s"], s["steps"]) == (plan.time_step_s, plan.steps)
+    assert s["punch_speed_m_s"] == plan.speed_m_s
     for name in ("curve.csv", "summary.json", "curve.png", "shear_angle.png",
                  "shear_angle.csv", "shear_angle.npz", "final.vtu", "shape.png",
                  "trajectory.h5"):

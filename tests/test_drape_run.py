@@ -1,5 +1,6 @@
 """A drape run converts its trajectory once (issue 15: ``Drape.run`` used to finalise again
-after ``DrivenTest.run``); checked without LAMMPS: a stand-in engine and reduction."""
+after ``DrivenTest.run``) and keeps its run plan; checked without LAMMPS: a stand-in engine
+and reduction."""
 
 from __future__ import annotations
 
@@ -72,3 +73,35 @@ def test_a_failed_drape_salvages_its_frames_once(blank, conversions, tmp_path):
     with pytest.raises(SimulationFailed):
         drape.run(blank, tmp_path / "drape", engine=StandInEngine(fail=True))
     assert conversions == ["salvage"]
+
+
+def test_a_drape_plans_once_with_its_tools(blank, monkeypatch, tmp_path):
+    """The drape's time step, output interval and damping come from the one plan (issue 15:
+    it overrode them): bounded by the stiffer of fibre and tool contact, the interval a
+    multiple of the means' sampling interval, τ the whole draw; the run folder keeps it."""
+    from fabmd.model.timestep import stable_time_step_s
+    from fabmd.protocols.drape.input import SAMPLE_EVERY
+    from fabmd.scene.plan import read_plan
+
+    calls = []
+    derive = driven.DrivenTest.derive_plan
+    monkeypatch.setattr(driven.DrivenTest, "derive_plan",
+                        lambda self, model: calls.append(1) or derive(self, model))
+    monkeypatch.setattr(Drape, "reduce", stand_in_reduce)
+    drape = Drape(**SMALL, trajectory=TrajectoryOutput(frames=2, paraview=False))
+    model = drape.prepare(blank)
+    text = drape.input_text(model)
+    plan = drape.plan(model)
+    assert len(calls) == 1
+    assert plan.time_step_s == stable_time_step_s(model, (drape.contact, drape.tool),
+                                                  drape.time_step)
+    assert plan.time_step_s <= stable_time_step_s(model, (drape.contact,), drape.time_step)
+    assert f"timestep        {plan.time_step_s:.10g}" in text
+    assert plan.every % SAMPLE_EVERY == 0 and plan.steps % plan.every == 0
+    assert plan.every == SAMPLE_EVERY * max(
+        1, int(np.ceil(plan.duration_s / plan.time_step_s)) // drape.samples // SAMPLE_EVERY)
+    assert plan.damping_time_s == plan.duration_s == drape.duration_s(model)
+    assert plan.gamma_kg_s == pytest.approx(float(np.median(model.masses)) / plan.duration_s)
+    assert Drape(**SMALL, damping_time_s=1.0).plan(model).damping_time_s == 1.0
+    result = drape.run(blank, tmp_path / "drape", engine=StandInEngine())
+    assert read_plan(result.run_dir) == plan

@@ -188,7 +188,7 @@ class DrivenTest:
         return self.plan(model).steps
 
     def gamma(self, model: BeadModel) -> float:
-        """Viscous damping coefficient γ = m/τ [kg/s] (τ default: a tenth of the test)."""
+        """Viscous damping coefficient γ = m/τ [kg/s] (τ: :meth:`plan_damping_time_s`)."""
         return self.plan(model).gamma_kg_s
 
     # -- the plan: derived once per model, kept in the run folder -------------------------
@@ -202,29 +202,24 @@ class DrivenTest:
         derived once (:meth:`derive_plan`) and kept until asked for another model."""
         return cached_plan(self, model, self.derive_plan)
 
+    def plan_every(self, duration_s: float, dt: float) -> int:
+        """Output interval [steps]: about ``samples`` curve points over ``duration_s``."""
+        return max(1, math.ceil(duration_s / dt) // self.samples)
+
+    def plan_damping_time_s(self, duration_s: float) -> float:
+        """τ of the drag [s]: ``damping_time_s``, default a tenth of the test."""
+        return self.damping_time_s or duration_s / 10
+
     def derive_plan(self, model: BeadModel) -> RunPlan:
         """The one place the plan is derived (see :meth:`plan`)."""
-        cls = type(self)
         duration = self.duration_s(model)
-        # a subclass that still overrides time_step_s/every/gamma (drape, until it
-        # moves to plan_contacts) keeps its own values
-        if cls.time_step_s is not DrivenTest.time_step_s:
-            dt = self.time_step_s(model)
-        else:
-            dt = stable_time_step_s(model, self.plan_contacts(), self.time_step)
-        if cls.every is not DrivenTest.every:
-            every = self.every(model)
-        else:
-            every = max(1, math.ceil(duration / dt) // self.samples)
+        dt = stable_time_step_s(model, self.plan_contacts(), self.time_step)
+        every = self.plan_every(duration, dt)
         steps = every * math.ceil(duration / dt / every)
         k = duration / (steps * dt)
         nominal = self.nominal_loading(model)
-        mass = float(np.median(model.masses))
-        tau = self.damping_time_s or duration / 10
-        gamma = mass / tau
-        if cls.gamma is not DrivenTest.gamma:
-            gamma = self.gamma(model)
-            tau = mass / gamma
+        tau = self.plan_damping_time_s(duration)
+        gamma = float(np.median(model.masses)) / tau
         return RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=duration,
                        speed_m_s=nominal.speed_m_s * k, ramp_time_s=nominal.ramp_time_s / k,
                        damping_time_s=tau, gamma_kg_s=gamma)

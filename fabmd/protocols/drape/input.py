@@ -60,7 +60,7 @@ def clamp_values(test: Drape, model: BeadModel, geometry: DrapeGeometry) -> dict
     crossing under it."""
     control = test.holder_control(model, geometry)
     ref = test.holder_share_n(geometry) / control["crossings_under_holder"]
-    k = max(2 * bt.coefficient for bt in model.fibre_bond_types())
+    k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
     dt = test.time_step_s(model)
     return {"clamp_damping": 0.7,
             "clamp_drag": float(np.median(model.masses)) / (200.0 * dt),

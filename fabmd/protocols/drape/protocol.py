@@ -9,17 +9,13 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
-
-import numpy as np
 
 from ... import inputs
 from ...errors import InputError
 from ...model.bead_model import BeadModel
-from ...model.beads import TimeStep, model_bead_parameters
-from ...model.contact import ContactModel, ToolContact
+from ...model.beads import model_bead_parameters
+from ...model.contact import ToolContact
 from ...scene.energy import ContactPower
-from ...scene.outputs import TrajectoryOutput
 from ...scene.quasi_static import QuasiStatic
 from ..driven import DrivenResult, DrivenTest
 from .geometry import (
@@ -38,9 +34,13 @@ PROTOCOL = "drape"
 SYMMETRIES = ("quarter", "full")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Drape(DrivenTest):
     """Hemispherical-punch draping of a flat blank (warp along x, weft along y).
+
+    The ``contact``, ``time_step``, ``samples`` and ``trajectory`` fields are those of
+    :class:`~fabmd.protocols.driven.DrivenTest`; the time step is bounded by the stiffer of
+    fibre–fibre and tool contact (:meth:`plan_contacts`).
 
     Args:
         punch_radius_m: punch radius R [m] (> 0).
@@ -58,17 +58,13 @@ class Drape(DrivenTest):
             in (0, 1] (default 0.03: enough to keep the tangential history, see the contact
             section of the README; the damper under the holder limits how fast its force
             control may act, so a lighter one lets it follow the fabric's thickness).
-        contact: fibre–fibre contact.
         speed_fraction: punch speed over the fibres' axial wave speed (> 0, <= 0.05).
         ramp_fraction: share of the draw spent reaching full punch speed smoothly.
         clamp: when the clamping phase (holder closing, punch waiting, fabric relaxing
             under local damping) is over: quasi-static criterion and its step limit.
-        damping_time_s: τ of the viscous damping γ = m/τ (default: the draw's duration).
-        time_step: time-step policy.
-        samples: curve points.
+        damping_time_s: τ of the viscous damping γ = m/τ [s] (default: the draw's duration).
         shear_cell_m: cell of the shear-angle grid [m]; default two yarn spacings (one
             plain-weave unit cell, so the crimp cancels).
-        trajectory: trajectory frames (``TrajectoryOutput(frames=0)`` writes none).
         report_depths_m: depths at which punch forces are reported [m].
         modulus_scale: factor on the fibres' axial (and bending) stiffness for this test,
             in (0, 1]. Draping loads fibres far below their strength and stiffness (the
@@ -80,6 +76,17 @@ class Drape(DrivenTest):
             nothing but the cost (``benchmarks/drape.py`` measures both).
     """
 
+    protocol = PROTOCOL
+    rate_curve = ("depth_m", "punch_force_n")
+    rate_keys = {"max_punch_force_change": "max_punch_force_n",
+                 "max_shear_angle_change": "max_shear_angle_deg"}
+    # the fabric riding on the punch makes KE/W large in a slow draw (see ``inertia``): the
+    # drape judges the inertial share of the punch force instead
+    quasi_static_limits = {"mean_inertial_to_punch_force": 0.05, "damping_share": 0.5,
+                           "energy_balance_error": 0.05}
+
+    speed_fraction: float = 5e-4
+    ramp_fraction: float = 0.05
     punch_radius_m: float = 0.05
     depth_m: float = 0.04
     die_clearance_m: float = 0.003
@@ -89,30 +96,13 @@ class Drape(DrivenTest):
     symmetry: str = "quarter"
     tool: ToolContact = field(default_factory=lambda: ToolContact(friction=0.2))
     holder_damping_ratio: float = 0.03
-    contact: ContactModel = field(default_factory=ContactModel)
-    speed_fraction: float = 5e-4
-    ramp_fraction: float = 0.05
     clamp: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=20_000))
-    damping_time_s: float | None = None
-    time_step: TimeStep = field(default_factory=TimeStep)
-    samples: int = 200
     shear_cell_m: float | None = None
-    trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     report_depths_m: tuple[float, ...] = ()
     modulus_scale: float = 1.0
     tool_zones: bool = True
 
-    protocol: ClassVar[str] = PROTOCOL
-    rate_curve: ClassVar[tuple[str, str]] = ("depth_m", "punch_force_n")
-    rate_keys: ClassVar[dict[str, str]] = {"max_punch_force_change": "max_punch_force_n",
-                                           "max_shear_angle_change": "max_shear_angle_deg"}
-    # the fabric riding on the punch makes KE/W large in a slow draw (see ``inertia``): the
-    # drape judges the inertial share of the punch force instead
-    quasi_static_limits: ClassVar[dict[str, float]] = {"mean_inertial_to_punch_force": 0.05,
-                                                       "damping_share": 0.5,
-                                                       "energy_balance_error": 0.05}
-
-    def __post_init__(self):
+    def check_fields(self) -> None:
         r = inputs.positive("drape.punch_radius_m", self.punch_radius_m)
         inputs.positive("drape.depth_m", self.depth_m)
         if self.depth_m > r:
@@ -126,25 +116,14 @@ class Drape(DrivenTest):
                 raise InputError(f"drape.holder_inner_radius_m must be >= the die opening "
                                  f"radius {r + self.die_clearance_m:g} m (the holder presses "
                                  f"the fabric on the die), got {self.holder_inner_radius_m:g}")
-        if self.holder_gain_m_s_n is not None:
-            inputs.positive("drape.holder_gain_m_s_n", self.holder_gain_m_s_n)
+        self.check_positive_or_none("holder_gain_m_s_n", "shear_cell_m")
         inputs.one_of("drape.symmetry", self.symmetry, SYMMETRIES)
         if not isinstance(self.tool, ToolContact):
             raise InputError(f"drape.tool must be a ToolContact, got {self.tool!r}")
         inputs.in_range("drape.holder_damping_ratio", self.holder_damping_ratio, 0.0, 1.0,
                         low_open=True)
-        inputs.in_range("drape.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
-        inputs.in_range("drape.ramp_fraction", self.ramp_fraction, 0, 0.9)
         if not isinstance(self.clamp, QuasiStatic):
             raise InputError(f"drape.clamp must be a QuasiStatic, got {self.clamp!r}")
-        if self.damping_time_s is not None:
-            inputs.positive("drape.damping_time_s", self.damping_time_s)
-        inputs.positive_int("drape.samples", self.samples, minimum=10)
-        if self.shear_cell_m is not None:
-            inputs.positive("drape.shear_cell_m", self.shear_cell_m)
-        if not isinstance(self.trajectory, TrajectoryOutput):
-            raise InputError(f"drape.trajectory must be a TrajectoryOutput, "
-                             f"got {self.trajectory!r}")
         for d in self.report_depths_m:
             inputs.positive("drape.report_depths_m", d)
         inputs.in_range("drape.modulus_scale", self.modulus_scale, 0, 1, low_open=True)
@@ -195,24 +174,19 @@ class Drape(DrivenTest):
     def travel_from(self, gap_m: float) -> float:
         return self.depth_m + gap_m
 
-    def time_step_s(self, model: BeadModel) -> float:
-        """Stable time step with the stiffer of fibre–fibre and tool contact."""
-        beads = model_bead_parameters(model)
-        kn = max(self.contact.stability_stiffness_n_per_m(beads),
-                 self.tool.normal_stiffness_n_per_m(beads))
-        return self.time_step.resolve(min(b.critical_time_step_s(kn) for b in beads))
+    def plan_contacts(self) -> tuple:
+        """The time step is bounded by the stiffer of fibre–fibre and tool contact."""
+        return (self.contact, self.tool)
 
-    def gamma(self, model: BeadModel) -> float:
-        """Viscous damping γ = m/τ [kg/s]; τ default: the whole draw (a light drag: the fabric
-        moves with the punch, and drag on it adds to the punch force)."""
-        tau = self.damping_time_s or self.duration_s(model)
-        return float(np.median(model.masses)) / tau
-
-    def every(self, model: BeadModel) -> int:
+    def plan_every(self, duration_s: float, dt: float) -> int:
         """Output interval: a multiple of the sampling interval of the means."""
-        raw = math.ceil(self.duration_s(model) / self.time_step_s(model))
+        raw = math.ceil(duration_s / dt)
         return SAMPLE_EVERY * max(1, raw // self.samples // SAMPLE_EVERY)
 
+    def plan_damping_time_s(self, duration_s: float) -> float:
+        """τ of the viscous damping γ = m/τ [s]; default the whole draw (a light drag: the
+        fabric moves with the punch, and drag on it adds to the punch force)."""
+        return self.damping_time_s or duration_s
 
     @property
     def holder_tool(self) -> ToolContact:
@@ -222,8 +196,11 @@ class Drape(DrivenTest):
     def holder_share_n(self, geometry: DrapeGeometry) -> float:
         return self.holder_force_n * geometry.share
 
-    def holder_control(self, model: BeadModel, geometry: DrapeGeometry) -> dict:
-        """Force-control gain α [m/s/N], its integral time and what limits them.
+    def holder_control(self, model: BeadModel, geometry: DrapeGeometry,
+                       dt: float | None = None) -> dict:
+        """Force-control gain α [m/s/N], its integral time and what limits them, for the time
+        step ``dt`` [s] (default: the plan's; ``reduce`` passes the one the run was planned
+        with).
 
         Holder speed = α·(F_set − F + ∫(F_set − F) dt / T_i) (the integral only after the
         clamping phase). The holder is a massless plate on a dashpot 1/α pressing on the
@@ -247,7 +224,7 @@ class Drape(DrivenTest):
         stiffness = contacts * k_stack
         damping = contacts * wall["gamman"] * mass
         force = self.holder_share_n(geometry)
-        dt = self.time_step_s(model)
+        dt = dt or self.time_step_s(model)
         limit = min(0.1 / (stiffness * dt), 0.25 / damping)
         gain = self.holder_gain_m_s_n or limit
         # integral action removes the offset a proportional control keeps while the fabric
@@ -259,7 +236,6 @@ class Drape(DrivenTest):
                 "above_smooth_limit": gain > limit, "approach_speed_m_s": gain * force,
                 "estimated_stiffness_n_m": stiffness, "estimated_damping_n_s_m": damping,
                 "crossings_under_holder": crossings}
-
 
     # -- input and reduction --------------------------------------------------------------
     def input_text(self, model: BeadModel) -> str:

@@ -25,7 +25,7 @@ from .report import plot_specs, write_final
 
 if TYPE_CHECKING:
     from ...analysis.angles import Field
-    from ...scene.loading import SmoothStartSpeed
+    from ...scene.plan import RunPlan
     from .protocol import Drape
 
 
@@ -90,9 +90,9 @@ def force_curve(out: Outputs, g: DrapeGeometry, every: int, dt: float) -> dict:
 
 
 def holder_summary(run_dir: Path, out: Outputs, test: Drape, model: BeadModel,
-                   g: DrapeGeometry) -> dict:
+                   g: DrapeGeometry, dt: float) -> dict:
     """The blank holder's force against its set value over the draw (interval means after
-    the clamping phase, whole blank) and its force control."""
+    the clamping phase, whole blank) and its force control at the time step ``dt`` [s]."""
     scale = 1.0 / g.share
     set_force = test.holder_force_n
     means = out.means
@@ -109,7 +109,7 @@ def holder_summary(run_dir: Path, out: Outputs, test: Drape, model: BeadModel,
         "min_force_n": float(hmean.min()) if hmean.size else None,
         "holder_travel_m": float(np.ptp(out["holder_displacement_m"])),
         "clamp_end_force_n": float(clamp["holder_force_n"][-1] * scale) if clamp else None,
-        "control": test.holder_control(model, g),
+        "control": test.holder_control(model, g, dt),
         "note": "interval means over the draw (after the clamping phase), for the whole "
                 "blank; error = (F - F_set)/F_set",
     }
@@ -190,10 +190,10 @@ def max_bond_strain(model: BeadModel, final: BeadModel) -> float:
     return float(strain.max())
 
 
-def setup_summary(run_dir: Path, test: Drape, model: BeadModel, g: DrapeGeometry, dt: float,
-                  load: SmoothStartSpeed, strain: float) -> dict:
-    """The summary's first part: the model, tools, zones and loading of the run (and its
-    largest bond strain)."""
+def setup_summary(run_dir: Path, test: Drape, model: BeadModel, g: DrapeGeometry,
+                  plan: RunPlan, strain: float) -> dict:
+    """The summary's first part: the model, tools, zones and loading of the run (``plan``:
+    what it was run with) and its largest bond strain."""
     reach = test.reach(g)
     r0 = np.hypot(model.positions[:, 0], model.positions[:, 1])
     return {
@@ -218,10 +218,10 @@ def setup_summary(run_dir: Path, test: Drape, model: BeadModel, g: DrapeGeometry
         "max_bond_strain": strain,
         "tool_friction": test.tool.friction,
         "fibre_friction": test.contact.friction,
-        "time_step_s": dt,
-        "steps": test.steps(model),
+        "time_step_s": plan.time_step_s,
+        "steps": plan.steps,
         "clamp_steps": clamp_steps(run_dir),
-        "punch_speed_m_s": load.speed_m_s,
+        "punch_speed_m_s": plan.speed_m_s,
     }
 
 
@@ -231,14 +231,14 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
     run_dir = Path(run_dir)
     g = tool_geometry(test, model)
     scale = 1.0 / g.share
-    dt = test.time_step_s(model)
-    out = read_outputs(run_dir, test.every(model), dt, monitor)
-    curve = force_curve(out, g, test.every(model), dt)
+    plan = test.read_plan(run_dir, model)  # what the run was written with
+    dt = plan.time_step_s
+    out = read_outputs(run_dir, plan.every, dt, monitor)
+    curve = force_curve(out, g, plan.every, dt)
     travel, depth = curve["punch_travel_m"], curve["depth_m"]
     punch = curve["punch_force_n"]
-    load = test.loading(model)
-    started = started_mask(out, load, travel / test.travel_m(model))
-    holder = holder_summary(run_dir, out, test, model, g)
+    started = started_mask(out, plan.loading, travel / test.travel_m(model))
+    holder = holder_summary(run_dir, out, test, model, g, dt)
     terms = energy_terms(out, curve["tool_contact_work_j"][-1], scale)
     final = BeadModel.load(run_dir / "final.data", run_dir / "model.json")
     ref, cur = model.positions, final.positions
@@ -252,7 +252,7 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
     ratio = (inertia["mean_inertial_force_n"] / inertia["mean_punch_force_n"]
              if inertia["mean_inertial_force_n"] is not None and inertia["mean_punch_force_n"]
              else None)
-    summary = setup_summary(run_dir, test, model, g, dt, load, max_bond_strain(model, final))
+    summary = setup_summary(run_dir, test, model, g, plan, max_bond_strain(model, final))
     summary.update({
         "max_punch_force_n": float(punch.max()),
         "final_punch_force_n": float(punch[depth >= 0.95 * depth[-1]].mean()),
