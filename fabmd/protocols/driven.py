@@ -88,7 +88,7 @@ class DrivenTest:
     keys compared by ``check_rate``: {report name: key}) and others declared here (plain
     assignments: the ``ClassVar`` declarations here keep them out of the fields), and
     defines :meth:`travel_m`, :meth:`input_text` and :meth:`reduce`;
-    :meth:`check_fields` validates its own fields when it is built.
+    :meth:`check_fields` validates its own fields when it is built; ``plan_*`` adapt its plan.
 
     Args:
         speed_fraction: speed of the driven boundary (clamp, corner, box face, punch)
