@@ -36,7 +36,7 @@ def _in_scene(scene, message: str) -> InputError:
 
 def known_tables() -> tuple[str, ...]:
     """Stage tables a scene file may hold: ``crimp`` and one per test."""
-    from .pipeline import TESTS, section
+    from .stages import TESTS, section
 
     return ("crimp", *(section(t) for t in TESTS))
 
@@ -53,7 +53,7 @@ class TestPlan:
 
 def plan_test(scene, test: str) -> TestPlan:
     """Validate one test's tables (protocol and coupon); errors name the scene file."""
-    from .pipeline import TESTS, coupon_stage, protocol_stage, section
+    from .stages import TESTS, coupon_stage, protocol_stage, section
 
     try:
         if test not in TESTS:
@@ -77,7 +77,7 @@ def check_scene(scene) -> None:
     Raises:
         InputError: naming the scene file, the table and the key or value.
     """
-    from .pipeline import TESTS, crimp_stage, section
+    from .stages import TESTS, crimp_stage, section
 
     known = known_tables()
     for name in scene.protocols:
@@ -104,7 +104,7 @@ def check_test(scene, test: str, plan: TestPlan) -> None:
     Raises:
         InputError: what does not fit and which scene-file field to change.
     """
-    from .pipeline import section
+    from .stages import section
 
     sec = section(test)
     coupon = plan.coupon

@@ -136,6 +136,15 @@ def test_short_or_unbiased_coupons_are_refused():
         BiasExtension(central_zone_fraction=0.8)
 
 
+def test_clamps_that_leave_no_gauge_name_the_bias_extension():
+    # the message names this test's table, not the tension whose clamping it shares
+    with pytest.raises(InputError, match=r"^bias_extension\.clamp_length_m = 0\.01 m leaves no "
+                                         r"gauge length"):
+        BiasExtension(clamp_length_m=0.01).prepare(braced_bias_net())
+    with pytest.raises(InputError, match=r"^bias_extension\.clamp_length_m must be > 0"):
+        BiasExtension(clamp_length_m=-1e-3)
+
+
 # -- LAMMPS --------------------------------------------------------------------------------
 @pytest.mark.lammps
 def test_braced_net_shears_in_the_centre_and_balances_energy(tmp_path):

@@ -127,14 +127,8 @@ def find_cycles(edges: dict[str, set[str]]) -> list[list[str]]:
     return cycles
 
 
-#: cycles known and left for now, each with the reason: the scene-schema work of issue #15
-#: rewrites preflight and pipeline at the same time (fix: the stage builders into their
-#: own module below both)
-KNOWN_CYCLES = (["fabmd.pipeline", "fabmd.preflight"],)
-
-
 def test_no_import_cycles():
-    cycles = [c for c in find_cycles(graph()) if c not in KNOWN_CYCLES]
+    cycles = find_cycles(graph())
     assert not cycles, "import cycles:\n" + "\n".join(" ↔ ".join(c) for c in cycles)
 
 

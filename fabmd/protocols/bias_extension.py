@@ -39,6 +39,7 @@ from ..results.curves import bilinear_fit, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..scene.energy import ContactPower
 from .driven import ClampedTest, DrivenResult, energy_columns, read_outputs
+from .end_clamps import EndClampedTest
 from .tension import Tension
 
 PROTOCOL = "bias_extension"
@@ -58,11 +59,12 @@ def bias_displacement_m(shear_angle_deg, free_length_m: float, width_m: float):
 
 
 @dataclass(frozen=True, kw_only=True)
-class BiasExtension(ClampedTest):
+class BiasExtension(EndClampedTest):
     """Bias-extension test of a 45° coupon (length along x, H ≥ 2 W).
 
     The loading, contact, output, ``relax`` and ``drag`` fields are those of
-    :class:`~fabmd.protocols.driven.ClampedTest`: the affine drag field is the clamps'
+    :class:`~fabmd.protocols.driven.ClampedTest`, ``clamp_length_m`` that of
+    :class:`~fabmd.protocols.end_clamps.EndClampedTest`: the affine drag field is the clamps'
     stretch along x, which does not hold the central zone's shear, so some drag remains
     (see the summary's damping share); the fibre angles are measured on the trajectory
     frames (``TrajectoryOutput(frames=0)``: none written, none measured).
@@ -70,7 +72,6 @@ class BiasExtension(ClampedTest):
     Args:
         max_shear_angle_deg: central-zone shear angle (closed form) at the end [deg], (0, 80].
         max_displacement_m: clamp separation change at the end [m]; overrides the angle.
-        clamp_length_m: clamped length at each end [m]; default 10 % of the coupon.
         central_zone_fraction: half-size of the central square where fibre angles are
             measured, over the width W, in (0, 0.5].
         report_angles_deg: central shear angles at which forces are reported.
@@ -88,14 +89,14 @@ class BiasExtension(ClampedTest):
 
     max_shear_angle_deg: float = 40.0
     max_displacement_m: float | None = None
-    clamp_length_m: float | None = None
     central_zone_fraction: float = 0.2
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
 
     def check_fields(self) -> None:
         inputs.in_range("bias_extension.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
                         low_open=True)
-        self.check_positive_or_none("max_displacement_m", "clamp_length_m")
+        self.check_positive_or_none("max_displacement_m")
+        super().check_fields()
         inputs.in_range("bias_extension.central_zone_fraction", self.central_zone_fraction,
                         0, 0.5, low_open=True)
 
@@ -105,10 +106,7 @@ class BiasExtension(ClampedTest):
 
     def free_length_m(self, model: BeadModel) -> float:
         """H: the free length between the clamps [m]."""
-        return self._clamping().clamps(model)[2]
-
-    def _clamping(self) -> Tension:
-        return Tension(clamp_length_m=self.clamp_length_m)
+        return self.clamps(model)[2]
 
     def max_displacement(self, model: BeadModel) -> float:
         if self.max_displacement_m is not None:
@@ -153,8 +151,8 @@ class BiasExtension(ClampedTest):
         tension = self.tension(model)
         if tension.steps(model) != self.steps(model):  # one loading, two descriptions
             raise RuntimeError("bias_extension and its tension clamping disagree on the steps")
-        return tension.input_text(model).replace(
-            "# fabmd tension;", "# fabmd bias_extension (clamping and loading of tension);")
+        return tension.input_text(model,
+                                  header=f"{PROTOCOL} (clamping and loading of tension)")
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:

@@ -261,10 +261,11 @@ class DrivenTest:
             inputs.one_of(f"{name}.drag", self.drag, DRAG_KINDS)
 
     def scene_text(self, model: BeadModel, dt: float, protocol_text: str, *extra: str,
-                   after: tuple[str, ...] | None = None) -> str:
+                   after: tuple[str, ...] | None = None, header: str | None = None) -> str:
         """The whole input: set-up, bonds, contact, the test's own text and the contact-power
         sampling (energy balance), then ``after``; by default the trajectory outputs,
-        ``extra``, the guards, the run and the final data file."""
+        ``extra``, the guards, the run and the final data file. ``header`` names the test
+        in the first comment line (default: the protocol)."""
         beads = model_bead_parameters(model)
         if after is None:
             after = (self.trajectory_block(model), *extra, blocks.guards(model, dt),
@@ -272,7 +273,7 @@ class DrivenTest:
                      self.trajectory.final_commands(),
                      render("finish", final_data="final.data"))
         return "\n".join([
-            blocks.setup(model, self.protocol, DATA_FILE, dt),
+            blocks.setup(model, header or self.protocol, DATA_FILE, dt),
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
             protocol_text,

@@ -17,28 +17,28 @@ from pathlib import Path
 import numpy as np
 
 from .. import inputs
-from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.templates import fmt, render
-from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
+from .driven import DrivenResult, clamp_power, energy_columns, read_outputs
+from .end_clamps import EndClampedTest
 
 PROTOCOL = "tension"
 
 
 @dataclass(frozen=True, kw_only=True)
-class Tension(ClampedTest):
+class Tension(EndClampedTest):
     """Uniaxial tension test of a coupon (length along x).
 
     The loading, contact, output, ``relax`` and ``drag`` fields are those of
     :class:`~fabmd.protocols.driven.ClampedTest` (the affine drag field: the clamps'
-    stretch along x).
+    stretch along x), ``clamp_length_m`` and :meth:`clamps` those of
+    :class:`~fabmd.protocols.end_clamps.EndClampedTest`.
 
     Args:
         max_elongation_pct: elongation at the end of the test [%] (0, 50].
-        clamp_length_m: clamped length at each end [m]; default 10 % of the coupon.
         report_elongations_pct: elongations at which forces are reported.
     """
 
@@ -48,37 +48,21 @@ class Tension(ClampedTest):
     rate_keys = {"initial_stiffness_change": "initial_stiffness_n"}
 
     max_elongation_pct: float = 3.0
-    clamp_length_m: float | None = None
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
 
     def check_fields(self) -> None:
         inputs.in_range("tension.max_elongation_pct", self.max_elongation_pct, 0, 50,
                         low_open=True)
-        self.check_positive_or_none("clamp_length_m")
-
-    # -- geometry of the coupon --------------------------------------------------------
-    def clamps(self, model: BeadModel) -> tuple[float, float, float]:
-        """(x of the left clamp's inner edge, of the right one's, gauge length) [m].
-
-        The gauge length is the free length between the innermost clamped beads.
-        """
-        x = model.positions[:, 0]
-        length = float(x.max() - x.min())
-        clamp = self.clamp_length_m if self.clamp_length_m is not None else 0.1 * length
-        if 2 * clamp >= 0.8 * length:
-            raise InputError(f"tension.clamp_length_m = {clamp:g} m leaves no gauge length on a "
-                             f"{length:g} m coupon; use at most {0.4 * length:g} m per end")
-        left, right = self.clamp_edges(x, float(x.min() + clamp), float(x.max() - clamp))
-        gauge = float(x[x > right].min() - x[x < left].max())
-        return float(left), float(right), gauge
+        super().check_fields()
 
     def travel_m(self, model: BeadModel) -> float:
         """Each clamp moves half the elongation of the gauge length."""
         _, _, gauge = self.clamps(model)
         return 0.5 * self.max_elongation_pct / 100 * gauge
 
-    def input_text(self, model: BeadModel, extra: str = "") -> str:
-        """The LAMMPS input; ``extra`` (e.g. a dump) goes in before the run."""
+    def input_text(self, model: BeadModel, extra: str = "", header: str | None = None) -> str:
+        """The LAMMPS input; ``extra`` (e.g. a dump) goes in before the run; ``header``
+        names the test in its first comment line (default: tension)."""
         left, right, _ = self.clamps(model)
         dt = self.time_step_s(model)
         load = self.loading(model)
@@ -99,7 +83,7 @@ class Tension(ClampedTest):
                       relax=self.relax_block(model, "clamps", "free", ref_force),
                       displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
                       damping=damping, outputs=outputs)
-        return self.scene_text(model, dt, text, extra)
+        return self.scene_text(model, dt, text, extra, header=header)
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> TensionResult:
