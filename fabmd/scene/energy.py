@@ -9,7 +9,13 @@ elastic energy). Every term is measured on its own:
 * strain and kinetic energy: LAMMPS energies at each output;
 * contact work: the power of the contact forces on the relative motion of every
   contact pair, summed from ``compute pair/local`` between chunks of the
-  in-process run (sampled; not available in the standalone back end).
+  in-process run (sampled; not available in the standalone back end). It includes
+  what friction and contact damping dissipate and the elastic energy the contacts
+  hold (no pair style here reports a contact energy).
+
+``pair_style granular`` (the split contact) reports forces but no relative velocities
+in ``pair/local``: its contact power pairs the forces with the velocities of the two
+atoms (``property/local patom1 patom2``, rows checked against the centre vector).
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..engine import mpi
+from .templates import render
 
 LMP_STYLE_LOCAL = 2
 LMP_TYPE_ARRAY = 2
@@ -25,38 +32,71 @@ LMP_TYPE_ARRAY = 2
 class ContactPower:
     """Samples the power of all contact forces (callable as an engine monitor).
 
-    Columns of ``compute pair/local`` for the gran/* styles: normal force on i
-    (fx fy fz), tangential force on i (p1..p3), relative normal velocity (p5..p7)
-    and relative tangential velocity (p8..p10) of i with respect to j.
+    ``pair_style``: the fibre-fibre contact's LAMMPS pair style. Columns of ``compute
+    pair/local`` for the gran/* styles: normal force on i (fx fy fz), tangential force
+    on i (p1..p3), relative normal velocity (p5..p7) and relative tangential velocity
+    (p8..p10) of i with respect to j. For ``granular``: fx fy fz, tangential force on i
+    (p1..p3), x_i - x_j (p10..p12); the velocities come from the atoms (see module).
+    A sample whose rows do not line up is NaN: the balance then says it is not measured.
     """
 
     compute_id = "fabmd_contacts"
+    atoms_id = "fabmd_contact_atoms"
 
-    def __init__(self):
+    def __init__(self, pair_style: str = "gran/hooke/history"):
+        self.granular = pair_style == "granular"
         self.steps: list[int] = []
         self.power_w: list[float] = []
 
     @classmethod
-    def commands(cls) -> str:
+    def commands(cls, pair_style: str = "gran/hooke/history") -> str:
+        """LAMMPS text of the sampling computes for ``pair_style``."""
+        if pair_style == "granular":
+            return render("contact_power_granular", forces_id=cls.compute_id,
+                          atoms_id=cls.atoms_id).removesuffix("\n")
         return (f"compute         {cls.compute_id} all pair/local fx fy fz p1 p2 p3 p5 p6 p7 "
                 f"p8 p9 p10")
 
     def __call__(self, lmp) -> None:
-        try:
-            a = lmp.numpy.extract_compute(self.compute_id, LMP_STYLE_LOCAL, LMP_TYPE_ARRAY)
-        except Exception:  # noqa: BLE001 - no pairs on this rank
-            a = None
-        local = 0.0
-        if a is not None and len(a):
-            a = np.asarray(a).reshape(-1, 12)
-            local = float(np.einsum("ij,ij->", a[:, 0:3], a[:, 6:9])
-                          + np.einsum("ij,ij->", a[:, 3:6], a[:, 9:12]))
+        local = self._granular_power(lmp) if self.granular else self._gran_power(lmp)
         total = mpi.allreduce_sum([local])[0]
         step = int(lmp.extract_global("ntimestep"))
         if self.steps and step <= self.steps[-1]:  # the clock was reset: a new phase
             self.steps, self.power_w = [], []
         self.steps.append(step)
         self.power_w.append(total)
+
+    @classmethod
+    def _local(cls, lmp, compute_id: str, columns: int) -> np.ndarray:
+        try:
+            a = lmp.numpy.extract_compute(compute_id, LMP_STYLE_LOCAL, LMP_TYPE_ARRAY)
+        except Exception:  # noqa: BLE001 - no pairs on this rank
+            a = None
+        if a is None or not len(a):
+            return np.zeros((0, columns))
+        return np.asarray(a, float).reshape(-1, columns)
+
+    def _gran_power(self, lmp) -> float:
+        a = self._local(lmp, self.compute_id, 12)
+        return float(np.einsum("ij,ij->", a[:, 0:3], a[:, 6:9])
+                     + np.einsum("ij,ij->", a[:, 3:6], a[:, 9:12]))
+
+    def _granular_power(self, lmp) -> float:
+        # collective on every rank (gather_atoms), before any early return
+        natoms = int(lmp.get_natoms())
+        v = np.ctypeslib.as_array(lmp.gather_atoms("v", 1, 3)).reshape(natoms, 3)
+        x = np.ctypeslib.as_array(lmp.gather_atoms("x", 1, 3)).reshape(natoms, 3)
+        f = self._local(lmp, self.compute_id, 9)
+        ids = self._local(lmp, self.atoms_id, 2).astype(int) - 1  # atom ids from 1
+        if len(f) != len(ids):
+            return float("nan")
+        if not len(f):
+            return 0.0
+        i, j = ids[:, 0], ids[:, 1]
+        if not np.allclose(minimum_image(lmp, x[i] - x[j]), f[:, 6:9], rtol=1e-6,
+                           atol=1e-9 * float(np.abs(f[:, 6:9]).max())):
+            return float("nan")  # rows of the two computes do not describe the same pairs
+        return float(np.einsum("ij,ij->", f[:, 0:3] + f[:, 3:6], v[i] - v[j]))
 
     def state(self) -> dict:
         """Samples so far (saved with a checkpoint)."""
@@ -75,6 +115,15 @@ class ContactPower:
         p = -np.asarray(self.power_w)  # power going into the contacts
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * np.diff(s) * dt)])
         return np.interp(steps, s, cum, left=0.0)
+
+
+def minimum_image(lmp, d: np.ndarray) -> np.ndarray:
+    """Centre vectors ``d`` [m] reduced to their nearest periodic image (triclinic too)."""
+    lo, hi, xy, yz, xz, periodic, _ = lmp.extract_box()
+    h = np.array([[hi[0] - lo[0], xy, xz], [0.0, hi[1] - lo[1], yz], [0.0, 0.0, hi[2] - lo[2]]])
+    frac = np.linalg.solve(h, np.asarray(d, float).T)
+    frac -= np.round(frac) * np.asarray(periodic, float)[:, None]
+    return (h @ frac).T
 
 
 def cumulative(interval_mean: np.ndarray, every: int, dt: float) -> np.ndarray:
