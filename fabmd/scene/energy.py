@@ -20,9 +20,12 @@ atoms (``property/local patom1 patom2``, rows checked against the centre vector)
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..engine import mpi
+from ..errors import QuasiStaticWarning
 from .templates import render
 
 LMP_STYLE_LOCAL = 2
@@ -131,6 +134,12 @@ def cumulative(interval_mean: np.ndarray, every: int, dt: float) -> np.ndarray:
     return np.cumsum(np.asarray(interval_mean) * every * dt)
 
 
+#: why a balance has no closing error although the contacts were sampled
+UNMEASURED_NOTE = ("energy balance not measured: the contact work could not be sampled (the "
+                   "contact forces did not line up with their atoms); the quasi-static "
+                   "verdict does not judge the energy balance")
+
+
 def balance(external_j, strain_j, kinetic_j, damping_j, contact_j) -> dict:
     """Energy balance at the end of a run: the terms and the relative closing error."""
     terms = {"external_work_j": float(external_j[-1]),
@@ -142,6 +151,11 @@ def balance(external_j, strain_j, kinetic_j, damping_j, contact_j) -> dict:
         terms["relative_error"] = None
         terms["note"] = ("contact work is sampled by the in-process back end only; "
                          "not measured here")
+        return terms
+    if not np.all(np.isfinite(contact_j)):  # a sample could not be measured: say so
+        terms["contact_work_j"] = terms["relative_error"] = None
+        terms["note"] = UNMEASURED_NOTE
+        warnings.warn(QuasiStaticWarning(UNMEASURED_NOTE), stacklevel=2)
         return terms
     accounted = (terms["strain_energy_change_j"] + terms["kinetic_energy_change_j"]
                  + terms["damping_dissipation_j"] + terms["contact_work_j"])
