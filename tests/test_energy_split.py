@@ -5,7 +5,6 @@ power pairs them with the atoms' velocities (``property/local patom1 patom2``), 
 sample checking that the rows of the two computes describe the same pairs. A sample
 that cannot be measured makes the balance say so (None, a note, a warning), never NaN."""
 
-import ctypes
 import warnings
 
 import numpy as np
@@ -36,50 +35,45 @@ def test_classic_sampling_text_is_unchanged_and_granular_pairs_forces_with_atoms
 
 
 class FakeLammps:
-    """Two atoms along x in a periodic box, one contact: what the monitor reads."""
+    """One contact between atom 1 (owned) and atom 2 (owned, and a ghost image 10 m
+    further along x with the box's deformation velocity): what the monitor reads."""
 
     def __init__(self, dx):
-        self.x = np.array([[0.0, 0.0, 0.0], [0.9, 0.0, 0.0]])
-        self.v = np.array([[1.0, 0.0, 0.0], [-1.0, 0.5, 0.0]])
+        self.atoms = {"id": np.array([1, 2, 2]),
+                      "x": np.array([[0.0, 0.0, 0.0], [0.9, 0.0, 0.0], [-9.1, 0.0, 0.0]]),
+                      "v": np.array([[1.0, 0.0, 0.0], [-1.0, 0.5, 0.0], [-1.0, 1.5, 0.0]])}
         # normal force on 1 along -x, tangential along y; centre vector reported as dx
         self.local = {"fabmd_contacts": np.array([[-2.0, 0, 0, 0, 0.3, 0, *dx]]),
                       "fabmd_contact_atoms": np.array([[1.0, 2.0]])}
         self.numpy = self
+        self.step = 7
 
     def extract_compute(self, cid, style, kind):
         return self.local[cid]
 
-    def get_natoms(self):
-        return 2
-
-    def gather_atoms(self, name, kind, count):
-        a = getattr(self, name).ravel()
-        return (ctypes.c_double * a.size)(*a)
-
-    def extract_box(self):  # 10 long, periodic in x: x1 - x2 = -0.9
-        return [0, 0, 0], [10, 10, 10], 0.0, 0.0, 0.0, [1, 1, 1], 0
+    def extract_atom(self, name, nelem):
+        return self.atoms[name][:nelem]
 
     def extract_global(self, name):
-        return 7
+        return {"nlocal": 2, "nghost": 1, "ntimestep": self.step}[name]
 
 
-def test_granular_power_is_force_times_relative_velocity():
+def test_granular_power_is_force_times_relative_velocity_of_the_right_image():
     monitor = ContactPower("granular")
-    monitor(FakeLammps(dx=(-0.9, 0.0, 0.0)))
+    monitor(FakeLammps(dx=(-0.9, 0.0, 0.0)))  # the owned atom 2
     # F_i . (v_i - v_j) = (-2, 0.3, 0) . (2, -0.5, 0)
     assert monitor.power_w == [pytest.approx(-4.15)]
-    # the periodic image: x1 - x2 = -0.9 is +9.1 across the box
-    lmp = FakeLammps(dx=(-0.9, 0.0, 0.0))
-    lmp.x[1, 0] = -9.1
+    lmp = FakeLammps(dx=(9.1, 0.0, 0.0))  # the ghost image: its own velocity
+    lmp.step = 8
     monitor(lmp)
-    assert monitor.power_w[-1] == pytest.approx(-4.15)
+    assert monitor.power_w[-1] == pytest.approx(-2.0 * 2.0 + 0.3 * -1.5)
 
 
 def test_rows_that_do_not_line_up_give_an_unmeasured_balance_not_nan():
     monitor = ContactPower("granular")
     for step in (1, 2):
         lmp = FakeLammps(dx=(0.9, 0.0, 0.0))  # the reverse pair: not these atom ids
-        lmp.extract_global = lambda name, s=step: s
+        lmp.step = step
         monitor(lmp)
     assert all(np.isnan(monitor.power_w))
     contact = monitor.work_j(np.array([1.0, 2.0]), 1.0)

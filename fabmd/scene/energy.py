@@ -15,7 +15,8 @@ elastic energy). Every term is measured on its own:
 
 ``pair_style granular`` (the split contact) reports forces but no relative velocities
 in ``pair/local``: its contact power pairs the forces with the velocities of the two
-atoms (``property/local patom1 patom2``, rows checked against the centre vector).
+atoms (``property/local patom1 patom2``; atom j is the image, owned or ghost, whose
+centre vector is the one ``pair/local`` reports), as the gran/* styles see them.
 """
 
 from __future__ import annotations
@@ -85,20 +86,32 @@ class ContactPower:
                      + np.einsum("ij,ij->", a[:, 3:6], a[:, 9:12]))
 
     def _granular_power(self, lmp) -> float:
-        # collective on every rank (gather_atoms), before any early return
-        natoms = int(lmp.get_natoms())
-        v = np.ctypeslib.as_array(lmp.gather_atoms("v", 1, 3)).reshape(natoms, 3)
-        x = np.ctypeslib.as_array(lmp.gather_atoms("x", 1, 3)).reshape(natoms, 3)
         f = self._local(lmp, self.compute_id, 9)
-        ids = self._local(lmp, self.atoms_id, 2).astype(int) - 1  # atom ids from 1
-        if len(f) != len(ids):
+        tags = self._local(lmp, self.atoms_id, 2).astype(np.int64)
+        if len(f) != len(tags):
             return float("nan")
         if not len(f):
             return 0.0
-        i, j = ids[:, 0], ids[:, 1]
-        if not np.allclose(minimum_image(lmp, x[i] - x[j]), f[:, 6:9], rtol=1e-6,
-                           atol=1e-9 * float(np.abs(f[:, 6:9]).max())):
-            return float("nan")  # rows of the two computes do not describe the same pairs
+        # this rank's atoms and ghost images, as the pair style saw them: a ghost's
+        # velocity carries the box's deformation rate (fix deform remap v)
+        nlocal = int(lmp.extract_global("nlocal"))
+        nall = nlocal + int(lmp.extract_global("nghost"))
+        tag = np.asarray(lmp.numpy.extract_atom("id", nelem=nall), np.int64).reshape(-1)
+        x = np.asarray(lmp.numpy.extract_atom("x", nelem=nall), float).reshape(-1, 3)
+        v = np.asarray(lmp.numpy.extract_atom("v", nelem=nall), float).reshape(-1, 3)
+        dx = f[:, 6:9]
+        owned, found = _candidates(tag[:nlocal], tags[:, 0])  # atom i is owned: one local
+        i = owned[:, 0]
+        cand, valid = _candidates(tag, tags[:, 1])  # j: the image with x_i - x_j = dx
+        miss = np.linalg.norm(x[i][:, None, :] - x[cand] - dx[:, None, :], axis=2)
+        miss[~(valid & found[:, :1])] = np.inf
+        best = np.argmin(miss, axis=1)
+        rows = np.arange(len(f))
+        # the rows describe the same pairs (else this sample is not measured)
+        if np.any(~np.isfinite(miss[rows, best])) or np.any(
+                miss[rows, best] > 0.01 * np.linalg.norm(dx, axis=1)):
+            return float("nan")
+        j = cand[rows, best]
         return float(np.einsum("ij,ij->", f[:, 0:3] + f[:, 3:6], v[i] - v[j]))
 
     def state(self) -> dict:
@@ -120,13 +133,18 @@ class ContactPower:
         return np.interp(steps, s, cum, left=0.0)
 
 
-def minimum_image(lmp, d: np.ndarray) -> np.ndarray:
-    """Centre vectors ``d`` [m] reduced to their nearest periodic image (triclinic too)."""
-    lo, hi, xy, yz, xz, periodic, _ = lmp.extract_box()
-    h = np.array([[hi[0] - lo[0], xy, xz], [0.0, hi[1] - lo[1], yz], [0.0, 0.0, hi[2] - lo[2]]])
-    frac = np.linalg.solve(h, np.asarray(d, float).T)
-    frac -= np.round(frac) * np.asarray(periodic, float)[:, None]
-    return (h @ frac).T
+def _candidates(tag: np.ndarray, wanted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices into ``tag`` holding each ``wanted`` atom id (one row per id, padded; an id
+    not there gets index 0, marked False in the second array)."""
+    order = np.argsort(tag, kind="stable")
+    sorted_tag = tag[order]
+    lo = np.searchsorted(sorted_tag, wanted, "left")
+    count = np.searchsorted(sorted_tag, wanted, "right") - lo
+    width = max(1, int(count.max()))
+    k = np.arange(width)
+    valid = k[None, :] < count[:, None]
+    index = np.where(valid, np.minimum(lo[:, None] + k[None, :], len(tag) - 1), 0)
+    return order[index] if len(tag) else np.zeros_like(index), valid
 
 
 def cumulative(interval_mean: np.ndarray, every: int, dt: float) -> np.ndarray:
