@@ -141,7 +141,7 @@ class DrivenTest:
         return model
 
     def make_monitor(self) -> ContactPower:
-        return ContactPower()
+        return ContactPower(self.contact.pair_style())
 
     def quasi_static_evidence(self, out: Outputs, model: BeadModel, progress: np.ndarray,
                               work_ratio: bool = True) -> dict:
@@ -277,7 +277,7 @@ class DrivenTest:
             blocks.bonds(model),
             blocks.contact(model, self.contact, beads),
             protocol_text,
-            ContactPower.commands(),
+            ContactPower.commands(self.contact.pair_style()),
             *after,
         ])
 
