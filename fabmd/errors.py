@@ -13,6 +13,7 @@ prints its message as one line. The subclasses say where it came from:
   the likely cause and the remedy.
 * :class:`OutputExists` — a results folder would be overwritten.
 * :class:`NotQuasiStatic` — under ``--strict``, a test whose curve is not quasi-static.
+* :class:`CalibrationNotReached` — a calibration ran but missed a target (exit 3).
 * :class:`RunInterrupted` — a run stopped by a signal after writing its checkpoint.
 
 Each class carries the exit status of the ``fabmd`` command as ``exit_code``
@@ -34,7 +35,7 @@ EXIT_CODES = {
     0: "ok",
     1: "unexpected internal error (a bug: please report it with --traceback)",
     2: "input or usage error (nothing was run)",
-    3: "simulation failed or went unstable",
+    3: "simulation failed or went unstable, or a calibration did not reach its targets",
     4: "not quasi-static, under --strict",
     5: "interrupted (a checkpoint was written; continue with --resume)",
 }
@@ -98,6 +99,21 @@ class NotQuasiStatic(FabmdError):
     ``quasi_static`` names the measures that failed)."""
 
     exit_code = 4
+
+
+class CalibrationNotReached(FabmdError):
+    """``fabmd calibrate`` ran, but a target was not reached (the message says which, the
+    range tried, the best value and why; ``calibration.json`` records every run).
+
+    Attributes:
+        run_dir: the calibration folder.
+    """
+
+    exit_code = 3
+
+    def __init__(self, message: str, run_dir: Path | None = None):
+        self.run_dir = Path(run_dir) if run_dir is not None else None
+        super().__init__(message)
 
 
 class OverlapWarning(UserWarning):

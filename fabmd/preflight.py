@@ -35,10 +35,10 @@ def _in_scene(scene, message: str) -> InputError:
 
 
 def known_tables() -> tuple[str, ...]:
-    """Stage tables a scene file may hold: ``crimp`` and one per test."""
+    """Stage tables a scene file may hold: ``crimp``, ``calibrate`` and one per test."""
     from .stages import TESTS, section
 
-    return ("crimp", *(section(t) for t in TESTS))
+    return ("crimp", "calibrate", *(section(t) for t in TESTS))
 
 
 @dataclass(frozen=True)
@@ -89,6 +89,10 @@ def check_scene(scene) -> None:
         crimp_stage(scene)
     except InputError as exc:
         raise _in_scene(scene, exc) from None
+    if "calibrate" in scene.protocols:  # fabmd calibrate's targets
+        from .protocols.calibrate import targets_from_scene
+
+        targets_from_scene(scene)
     for test in TESTS:
         if section(test) in scene.protocols:
             check_test(scene, test, plan_test(scene, test))

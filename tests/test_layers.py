@@ -23,7 +23,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("results",),
     ("protocols",),
     ("verification", "export"),
-    ("scenefile", "settings", "stages", "preflight", "pipeline", "presets"),
+    ("scenefile", "settings", "stages", "preflight", "pipeline", "presets", "calibration"),
     ("cli", "__main__", ""),  # "" is fabmd/__init__.py: the public API on top
 )
 

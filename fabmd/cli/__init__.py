@@ -17,6 +17,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "validate": ("validate", "physics checks against closed form (fibre-tension, ...)"),
     "info": ("info", "LAMMPS version, packages and what fabmd needs of them"),
     "crimp": ("crimp", "the as-woven state of a fabric: crimp its loose form (scene file)"),
+    "calibrate": ("calibrate", "the crimp expansion that gives the datasheet's thickness, "
+                               "crimp, tension (scene file -> calibrated scene file)"),
     "test": ("test_cmd", "a virtual test end to end: crimp, coupon, test (scene file)"),
     "measure": ("measure", "thickness, crimp, volume fraction of the state in a run folder"),
     "build": ("build", "render a fabric scene (TOML) into beads: data file, VTU, preview"),

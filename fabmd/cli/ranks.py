@@ -25,10 +25,12 @@ def model_beads(args) -> int | None:
         scene = apply_preset(load_scene(args.scene or example_scene("plain_weave.toml")),
                              args.preset)
         return max(_test_beads(scene, t) for t in ("tension", "picture-frame"))
-    if command in ("test", "crimp"):
+    if command in ("test", "crimp", "calibrate"):
         from .common import scene_from
 
         scene = scene_from(args)
+        if command == "calibrate":  # the periodic cell, crimped (and pressed) again and again
+            return _cell_beads(scene)
         if command == "test":
             return _test_beads(scene, args.name)
         cell = _cell_beads(scene)

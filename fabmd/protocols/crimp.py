@@ -217,8 +217,11 @@ class Crimp:
 
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False, resume: bool = False) -> CrimpResult:
+            overwrite: bool = False, resume: bool = False, figures: bool = True) -> CrimpResult:
         """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures.
+
+        ``figures=False`` draws no ``sections.png``, ``cuts/`` and ``history.png`` (the
+        calibration's trial runs: the figures take longer than a small cell's crimp).
 
         ``resume``: continue the interrupted crimp in ``out`` from its checkpoint. A shrink
         beyond a family's loose crimp is warned about (``UserWarning``) and listed in the
@@ -245,7 +248,7 @@ class Crimp:
         summary = None
         crimped = None
         if mpi.is_root():
-            crimped, summary = reduce(run_dir, model, self)
+            crimped, summary = reduce(run_dir, model, self, figures=figures)
             summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend,
                            shrink_warnings=shrink,
                            trajectory=trajectory.name if trajectory else None)
@@ -287,8 +290,10 @@ def load_crimped(run_dir: Path) -> BeadModel:
     return BeadModel.load(run_dir / f"{CRIMPED}.data", meta)
 
 
-def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, dict]:
-    """Read the crimp run back: crimped model (with final rest lengths), measures, history."""
+def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
+           figures: bool = True) -> tuple[BeadModel, dict]:
+    """Read the crimp run back: crimped model (with final rest lengths), measures, history
+    (and its figures unless ``figures`` is False)."""
     run_dir = Path(run_dir)
     raw = read_print_file(run_dir / "history.dat")
     crimped = BeadModel.load(run_dir / f"{CRIMPED}.data", run_dir / "model.json")
@@ -326,17 +331,19 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp) -> tuple[BeadModel, di
     write_csv(run_dir / "history.csv", history)
     plan = read_plan(run_dir) or crimp.plan(loose)  # what the run was written with
     ramp = plan.extra["ramp_steps"]
-    preview_png(crimped, run_dir / "sections.png",
-                title="As-woven state after the crimp stage (cuts along warp and weft)")
-    cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
-    plot_curves(run_dir / "history.png", [
-        {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
-    ], "time step [–]", "thickness [mm]", title="Crimp: thickness during ramp and relaxation",
-        notes=f"{end.sentence()}\nKE/U at the end {final_ke:.3g}"
-              f" (limit {qs.kinetic_ratio:.3g})",
-        marks=[{"kind": "vline", "x": ramp, "label": f"ramp ends (step {ramp:,})"},
-               {"kind": "vline", "x": steps, "style": "-",
-                "label": f"LAMMPS stopped (step {steps:,}): {end.stopped_by}"}])
+    if figures:
+        preview_png(crimped, run_dir / "sections.png",
+                    title="As-woven state after the crimp stage (cuts along warp and weft)")
+        cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
+        plot_curves(run_dir / "history.png", [
+            {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
+        ], "time step [–]", "thickness [mm]",
+            title="Crimp: thickness during ramp and relaxation",
+            notes=f"{end.sentence()}\nKE/U at the end {final_ke:.3g}"
+                  f" (limit {qs.kinetic_ratio:.3g})",
+            marks=[{"kind": "vline", "x": ramp, "label": f"ramp ends (step {ramp:,})"},
+                   {"kind": "vline", "x": steps, "style": "-",
+                    "label": f"LAMMPS stopped (step {steps:,}): {end.stopped_by}"}])
     summary = {
         "protocol": PROTOCOL,
         "expansion": crimp.expansion,

@@ -32,29 +32,32 @@ from ..results.folder import write_json
 _CN_PER_TEX = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*cN/tex\s*$")
 
 
-def check_target_tension(target) -> None:
-    """Validate ``Crimp.target_tension`` without a model (units, sign, shape)."""
+def check_target_tension(target, key: str = "crimp.target_tension") -> None:
+    """Validate ``Crimp.target_tension`` without a model (units, sign, shape); ``key``
+    is its name in messages."""
     values = target.items() if isinstance(target, dict) else [("", target)]
     for fam, value in values:
-        name = f"crimp.target_tension{'.' + fam if fam else ''}"
+        name = f"{key}{'.' + fam if fam else ''}"
         match = _CN_PER_TEX.match(value) if isinstance(value, str) else None
         number = float(match.group(1)) if match else units.quantity(value, "force", name)
         if not number > 0:
             raise InputError(f"{name} must be > 0 (N per yarn or cN/tex), got {value!r}")
 
 
-def target_tensions_n(target, model: BeadModel) -> dict[str, float]:
-    """The target tension per family in N per yarn, from ``Crimp.target_tension``."""
+def target_tensions_n(target, model: BeadModel,
+                      key: str = "crimp.target_tension") -> dict[str, float]:
+    """The target tension per family in N per yarn, from ``Crimp.target_tension`` (``key``:
+    its name in messages)."""
     if not isinstance(target, dict):
         target = {fam: target for fam in model.family_names}
     unknown = set(target) - set(model.family_names)
     if unknown:
-        raise InputError(f"crimp.target_tension names families {sorted(unknown)} that the "
+        raise InputError(f"{key} names families {sorted(unknown)} that the "
                          f"fabric does not have (it has {list(model.family_names)})")
     families = (model.info or {}).get("families", {})
     out = {}
     for fam, value in target.items():
-        name = f"crimp.target_tension.{fam}"
+        name = f"{key}.{fam}"
         match = _CN_PER_TEX.match(value) if isinstance(value, str) else None
         if match:
             tex = families.get(fam, {}).get("linear_density_tex")

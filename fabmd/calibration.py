@@ -1,0 +1,197 @@
+"""Calibrate a scene's crimp to its datasheet (``fabmd calibrate SCENE --out DIR``).
+
+The targets come from the scene: its ``[calibrate]`` table
+(:class:`~fabmd.protocols.calibrate.CrimpTargets`) and, where that gives no thickness,
+the datasheet's ``[fabric] thickness = "0.5 mm at 4.14 kPa"`` (the thickness under that
+pressure). The crimp settings are the scene's ``[crimp]`` (its expansion is the start),
+the platens that measure a thickness under pressure the scene's ``[compaction]``. The
+search runs the crimp stage repeatedly on the periodic cell
+(:func:`fabmd.protocols.calibrate.calibrate`). ``DIR`` then holds:
+
+* ``calibration.json``: the targets and where they came from, every run (strains,
+  achieved values, wall time), each knob's samples and verdict, the result;
+* ``run-NN/crimp`` (and ``run-NN/compaction``): the trial runs (no figures, no trajectory);
+* ``calibrated.toml``: the scene file as given with the found ``[crimp] expansion`` and
+  nothing else changed (checked by parsing both) — written when every searched target
+  is reached; the input file is never touched;
+* ``crimp/``: ``fabmd crimp calibrated.toml --form cell`` run in the same process (figures,
+  trajectory), which also shows that the calibrated file reproduces what was found.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from .engine import Engine, mpi
+from .errors import CalibrationNotReached, InputError, RunInterrupted
+from .preflight import check_scene
+from .protocols.calibrate import CalibrationResult, calibrate, targets_from_scene
+from .results.folder import abandon_run, begin_run, finish_run, write_json
+from .scenefile import Scene, load_scene
+from .stages import crimp_stage, periodic_cell, protocol_stage
+
+CALIBRATED = "calibrated.toml"
+
+
+@dataclass
+class Calibration:
+    """What ``fabmd calibrate`` found: the search's result, the calibrated scene file
+    (None where not written), the final crimp's summary (None where not run)."""
+
+    result: CalibrationResult
+    out: Path
+    calibrated: Path | None
+    final: dict | None
+    notes: list[str]
+
+
+def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
+                    overwrite: bool = False, settings: dict | None = None,
+                    preset: str = "default", on_run=None) -> Calibration:
+    """Calibrate ``scene``'s crimp expansion to its targets; module docstring.
+
+    Every check runs before LAMMPS starts (scene tables, targets, that the scene file can
+    be written back with a new expansion). ``preset``: the one applied to ``scene``, used
+    again on ``calibrated.toml`` for the final crimp.
+
+    Raises:
+        InputError: bad scene or targets (nothing run, no folder written).
+        CalibrationNotReached: a target was missed (``out`` holds ``calibration.json``).
+    """
+    where = scene.source or "scene"
+    check_scene(scene)
+    targets, notes = targets_from_scene(scene, settings)
+    base = crimp_stage(scene)
+    if base.target_tension is not None:
+        raise InputError(f"{where}: [crimp] target_tension searches the expansion itself: "
+                         f"for a calibration give it as [calibrate] target_tension instead")
+    compaction = protocol_stage(scene, "compaction") if targets.at_pressure_pa else None
+    text = Path(scene.source).read_text() if scene.source else None
+    if text is not None:  # can it be written back? (before anything runs)
+        with_expansion(text, {f: 0.0 for f in base.expansion or {"warp": 0}}, where)
+    cell = periodic_cell(scene)
+    if preset != "default":
+        notes.append(f"run with the preset --{preset}: crimp calibrated.toml with it too")
+    engine = engine or Engine(progress=False)
+    trial_engine = dataclasses.replace(engine, progress=False)
+    work = begin_run(out, overwrite=overwrite, prefix="calibration")
+    try:
+        result = calibrate(cell, targets, base=base, out=work, engine=trial_engine,
+                           compaction=compaction, on_run=on_run, notes=notes)
+        calibrated = final = None
+        if result.controlled_reached and text is not None:
+            calibrated = work / CALIBRATED
+            new_text = with_expansion(text, result.expansion, where, header=_header(
+                scene, result, preset))
+            if mpi.is_root():
+                calibrated.write_text(new_text)
+            mpi.barrier()
+            final = _final_crimp(calibrated, work / "crimp", engine, preset, result)
+    except (RunInterrupted, KeyboardInterrupt):
+        raise
+    except BaseException as exc:
+        abandon_run(out, work, exc)
+        raise
+    finish_run(out, work)
+    out = Path(out).resolve()
+    found = Calibration(result, out, out / CALIBRATED if calibrated else None, final, notes)
+    if not result.reached:
+        wrote = (f"; {CALIBRATED} written for the targets the expansions control"
+                 if calibrated else "")
+        raise CalibrationNotReached(f"calibration of {where} did not reach its targets: "
+                                    f"{result.reason} (every run in "
+                                    f"{out / 'calibration.json'}{wrote})", run_dir=out)
+    return found
+
+
+def _header(scene: Scene, result: CalibrationResult, preset: str) -> str:
+    fams = ", ".join(f"{f} {v:+.5g}" for f, v in sorted(result.expansion.items()))
+    run = "" if preset == "default" else f" with --{preset}"
+    return (f"# fabmd calibrate{run}: {Path(scene.source).name} with [crimp] expansion "
+            f"{fams} (run {result.best_run} of {len(result.runs)}); nothing else changed\n")
+
+
+def _final_crimp(calibrated: Path, folder: Path, engine: Engine, preset: str,
+                 result: CalibrationResult) -> dict:
+    """Crimp the calibrated scene file's cell (figures, trajectory) and add what it gave
+    beside what the search found to ``calibration.json``."""
+    from .presets import apply_preset
+
+    scene = apply_preset(load_scene(calibrated), preset)
+    crimped = crimp_stage(scene).run(periodic_cell(scene), folder, engine=engine)
+    s = crimped.summary
+    final = {"folder": str(folder), "expansion": s["expansion"],
+             "thickness_m": s["crimped"]["thickness_m"],
+             "crimp_pct": s["crimped"]["crimp_pct"],
+             "yarn_tension_n": {f: v["yarn_n"] for f, v in s["yarn_tension"].items()},
+             "quasi_static": s["quasi_static"], "wall_s": s["wall_s"]}
+    summary = dict(result.summary, final_crimp=final)
+    write_json(result.run_dir / "calibration.json", summary)
+    result.summary = summary
+    return final
+
+
+# ---- the scene file with a new [crimp] expansion ---------------------------------------
+_HEADER = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\s\"']+?)\s*\]\s*(#.*)?$")
+_EXPANSION = re.compile(r"^(\s*)expansion\s*=")
+
+
+def _number(value: float) -> str:
+    return repr(float(value))
+
+
+def with_expansion(text: str, expansion: dict[str, float], where: str = "scene",
+                   header: str = "") -> str:
+    """``text`` (a scene file) with ``[crimp] expansion`` set to ``expansion`` (families
+    not named keep theirs) and nothing else changed: the result is parsed and compared
+    with the original table by table.
+
+    Raises:
+        InputError: the file holds the expansion in a form this cannot edit (say which).
+    """
+    data = tomllib.loads(text)
+    crimp = data.get("crimp", {})
+    new_expansion = {**(crimp.get("expansion") or {}), **expansion}
+    inline = "{ " + ", ".join(f"{f} = {_number(v)}" for f, v in new_expansion.items()) + " }"
+    lines = text.splitlines(keepends=True)
+    tables = [(i, _HEADER.match(line).group(1).replace(" ", ""))
+              for i, line in enumerate(lines) if _HEADER.match(line)
+              and not line.lstrip().startswith("[[")]
+    names = [name for _, name in tables]
+    comment = "  # fabmd calibrate\n"
+    if "crimp.expansion" in names:
+        start = next(i for i, name in tables if name == "crimp.expansion")
+        end = next((i for i, _ in tables if i > start), len(lines))
+        body = [f"{f} = {_number(v)}\n" for f, v in new_expansion.items()]
+        lines[start + 1:end] = body + ["\n"]
+    elif "crimp" in names:
+        start = next(i for i, name in tables if name == "crimp")
+        end = next((i for i, _ in tables if i > start), len(lines))
+        hits = [i for i in range(start + 1, end) if _EXPANSION.match(lines[i])]
+        if hits:
+            i = hits[0]
+            lines[i] = f"{_EXPANSION.match(lines[i]).group(1)}expansion = {inline}{comment}"
+        else:
+            lines.insert(start + 1, f"expansion = {inline}{comment}")
+    elif "crimp" in data:
+        raise InputError(f"{where}: cannot write the calibrated expansion into this file's "
+                         f"crimp settings (not a [crimp] table): write them as [crimp]")
+    else:
+        if lines and not lines[-1].endswith("\n"):
+            lines[-1] += "\n"
+        lines += ["\n", "[crimp]\n", f"expansion = {inline}{comment}"]
+    new = header + "".join(lines)
+    wanted = dict(data, crimp=dict(crimp, expansion=new_expansion))
+    try:
+        got = tomllib.loads(new)
+    except tomllib.TOMLDecodeError as exc:
+        got = {"error": str(exc)}
+    if got != wanted:
+        raise InputError(f"{where}: cannot write the calibrated [crimp] expansion into this "
+                         f"file without changing something else (a dotted or inline form?); "
+                         f"write [crimp] expansion = {{ ... }} as one line")
+    return new
