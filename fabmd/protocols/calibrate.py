@@ -89,7 +89,7 @@ class CrimpTargets:
         strain_range: (lowest, highest) strain α·ΔT tried on any knob, within (−0.5,
             0.5) (default: a shrink at most the family's loose crimp, where the model
             knows it, else ±0.4; tension knobs ±0.4).
-        max_runs: crimp runs at most (>= 2; default 8).
+        max_runs: crimp runs at most (>= 2; default 12).
         datasheet: where ``thickness_m`` is not given, take the datasheet's
             ``[fabric] thickness`` (and its pressure) as the target (scene files only).
     """
@@ -103,7 +103,7 @@ class CrimpTargets:
     tension_tolerance: float = 0.05
     thickness_families: tuple[str, ...] | None = None
     strain_range: tuple[float, float] | None = None
-    max_runs: int = 8
+    max_runs: int = 12
     datasheet: bool = True
 
     def __post_init__(self):
@@ -208,7 +208,7 @@ class Knob:
     bounds: tuple[float, float]
     value: float
     first_step: float = 0.03
-    samples: list = field(default_factory=list)  # (strain, quantity)
+    samples: list = field(default_factory=list)  # (strain, quantity, other knobs' strains)
     verdict: str = ""  # "" searching, "reached", or why it stopped
 
     def error(self, q: float) -> float:
@@ -229,15 +229,17 @@ class Knob:
         return {"name": self.name, "kind": self.kind, "families": list(self.families),
                 "target": self.target, "tolerance": self.tolerance,
                 "strain_range": list(self.bounds), "verdict": self.verdict,
-                "samples": [{"strain": s, "value": q} for s, q in self.samples]}
+                "samples": [{"strain": s, "value": q} for s, q, _ in self.samples]}
 
 
 def next_strain(knob: Knob) -> tuple[float | None, str]:
     """The next strain to try for ``knob`` from its samples, or (None, why) when no strain
     in its range can reach the target (module docstring: bracket, secant, turn)."""
     by_strain: dict[float, float] = {}
-    for s, q in knob.samples:
-        by_strain[s] = q  # a strain tried twice: its latest value
+    context = knob.samples[-1][2]
+    for s, q, c in knob.samples:
+        if c == context:  # taken with the other knobs where they are now
+            by_strain[s] = q  # a strain tried twice: its latest value
     pts = sorted(by_strain.items())
     err = [knob.error(q) for _, q in pts]
     best = min(range(len(pts)), key=lambda i: abs(err[i]))
@@ -263,13 +265,35 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
     sigma = 1 if err[best] > 0 else -1
     s_best, q_best = pts[best]
     if len(pts) == 1:
-        new = _grid(min(max(s_best - sigma * knob.sign * knob.first_step, lo), hi))
+        step = knob.first_step
+        slope = _old_slope(knob)  # from before the other knobs moved, where there is one
+        if slope:
+            step = min(max(abs(err[best] / slope), 10 * STRAIN_RESOLUTION), 0.1)
+            direction = -1 if err[best] * slope > 0 else 1
+        else:
+            direction = -sigma * knob.sign
+        new = _grid(min(max(s_best + direction * step, lo), hi))
         if new == s_best:
             return None, (f"{knob.name}: {knob.text(q_best)} at the strain limit "
                           f"{s_best:+.4f} on {'+'.join(knob.families)}, target "
                           f"{knob.text(knob.target)}; widen calibrate.strain_range")
         return new, ""
-    # 3. best at an end of the range tried: go on outwards (secant, limited step)
+    # 3. flat: the neighbours of the best differ from it by less than the tolerance (slack
+    # yarns carry no tension whatever their expansion): go the way the physics says,
+    # beyond the samples, with a step as wide as the range tried
+    prior = -sigma * knob.sign
+    near = [pts[i][1] for i in (best - 1, best + 1) if 0 <= i < len(pts)]
+    if all(abs(q - q_best) < knob.tolerance for q in near):
+        edge = pts[0][0] if prior < 0 else pts[-1][0]
+        step = min(max(knob.first_step, pts[-1][0] - pts[0][0]), 0.1)
+        new = _grid(min(max(edge + prior * step, lo), hi))
+        if new == edge:
+            return None, (f"{knob.name}: the quantity hardly moves ({knob.text(pts[0][1])} "
+                          f"at {pts[0][0]:+.4f}, {knob.text(pts[-1][1])} at "
+                          f"{pts[-1][0]:+.4f}) up to the strain limit {edge:+.4f}; "
+                          f"{best_text}; widen calibrate.strain_range or change the target")
+        return new, ""
+    # 4. best at an end of the range tried: go on outwards (secant, limited step)
     if best in (0, len(pts) - 1):
         j = 1 if best == 0 else len(pts) - 2
         outward = -1 if best == 0 else 1
@@ -289,7 +313,7 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
                           f"target ({knob.text(q_j)} at {s_j:+.4f}): widen "
                           f"calibrate.strain_range or change the target")
         return new, ""
-    # 4. best inside: the response turns between its neighbours; find the turning point
+    # 5. best inside: the response turns between its neighbours; find the turning point
     (s_l, q_l), (s_r, q_r) = pts[best - 1], pts[best + 1]
     if s_r - s_l < 2 * MIN_STRAIN_WIDTH:
         way = "lowest" if (q_best < q_l and q_best < q_r) else "highest"
@@ -305,6 +329,16 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
     golden = 0.381966
     new = s_best + golden * right if right >= left else s_best - golden * left
     return _grid(new), ""
+
+
+def _old_slope(knob: Knob) -> float | None:
+    """d quantity / d strain from the latest two samples of one context (None: none)."""
+    for i in range(len(knob.samples) - 1, 0, -1):
+        for j in range(i - 1, -1, -1):
+            (s1, q1, c1), (s0, q0, c0) = knob.samples[i], knob.samples[j]
+            if c1 == c0 and s1 != s0:
+                return (q1 - q0) / (s1 - s0) or None
+    return None
 
 
 def _grid(strain: float) -> float:
@@ -381,9 +415,6 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
     runs: list[dict] = []
     results: dict[int, CrimpResult] = {}
     for k in range(1, max_runs + 1):
-        active = [kn for kn in knobs if not kn.verdict]
-        if not active:
-            break
         expansion = dict(base.expansion)
         for knob in knobs:
             for fam in knob.families:
@@ -410,40 +441,36 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                   "folder": str(folder)}
         if pressed is not None:
             record["pressure_reached"] = pressed.summary.get("pressure_reached")
+            record["compaction_quasi_static"] = pressed.summary["quasi_static"]["ok"]
             record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
         runs.append(record)
         results[k] = result
-        for knob in active:
+        for knob in knobs:
             q = achieved[knob.name]
             if q is None:
                 knob.verdict = (f"{knob.name}: not measured in run {k} (the compaction did "
                                 f"not reach {targets.at_pressure_pa:g} Pa, or its curve "
                                 f"starts above it: see {folder / 'compaction'})")
                 continue
-            knob.samples.append((knob.value, q))
+            context = tuple(kn.value for kn in knobs if kn is not knob)
+            knob.samples.append((knob.value, q, context))
+            if knob.verdict in ("", "reached"):  # one met may be pushed out by another's move
+                knob.verdict = "reached" if knob.converged(q) else ""
         if on_run is not None:
             on_run(record)
-        for knob in active:
-            if knob.verdict:
-                continue
-            if knob.converged(knob.samples[-1][1]):
-                knob.verdict = "reached"
-                continue
+        # move one knob per run, the one farthest off: each knob's samples then differ in
+        # its own strain only (the thickness of the warp shrink also moves with the weft's)
+        searching = sorted((kn for kn in knobs if not kn.verdict),
+                           key=lambda kn: -abs(kn.error(kn.samples[-1][1])) / kn.tolerance)
+        for knob in searching:
             new, why = next_strain(knob)
             if new is None:
                 knob.verdict = why
-            else:
-                knob.value = new
-        # a knob met earlier may be pushed out by the others' moves: search it again
-        for knob in knobs:
-            if knob.verdict == "reached" and knob not in active:
-                q = achieved[knob.name]
-                if q is not None and not knob.converged(q):
-                    knob.verdict = ""
-                    knob.samples.append((knob.value, q))
-                    new, why = next_strain(knob)
-                    knob.verdict, knob.value = (why, knob.value) if new is None else \
-                        ("", new)
+                continue
+            knob.value = new
+            break
+        if not any(not kn.verdict for kn in knobs):
+            break
     for knob in knobs:
         if not knob.verdict:
             knob.verdict = (f"{knob.name}: not reached within {max_runs} crimp runs "
@@ -496,7 +523,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
 
 def _closest(knob: Knob) -> tuple[float, float]:
     return min(knob.samples, key=lambda sq: abs(knob.error(sq[1])),
-               default=(knob.value, math.nan))
+               default=(knob.value, math.nan))[:2]
 
 
 def _score(run: dict, knobs: list[Knob]) -> float:
