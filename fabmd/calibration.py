@@ -29,7 +29,13 @@ from pathlib import Path
 from .engine import Engine, mpi
 from .errors import CalibrationNotReached, InputError, RunInterrupted
 from .preflight import check_scene
-from .protocols.calibrate import CalibrationResult, calibrate, targets_from_scene
+from .protocols.calibrate import (
+    CalibrationResult,
+    calibrate,
+    check_targets,
+    default_thickness_families,
+    targets_from_scene,
+)
 from .results.folder import abandon_run, begin_run, finish_run, write_json
 from .scenefile import Scene, load_scene
 from .stages import crimp_stage, periodic_cell, protocol_stage
@@ -74,6 +80,8 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     if text is not None:  # can it be written back? (before anything runs)
         with_expansion(text, {f: 0.0 for f in base.expansion or {"warp": 0}}, where)
     cell = periodic_cell(scene)
+    check_targets(cell, targets, base, tuple(targets.thickness_families
+                                             or default_thickness_families(cell)), compaction)
     if preset != "default":
         notes.append(f"run with the preset --{preset}: crimp calibrated.toml with it too")
     engine = engine or Engine(progress=False)

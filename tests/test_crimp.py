@@ -135,13 +135,13 @@ def test_calibration_says_why_it_cannot_reach(tmp_path):
     result = calibrate(plain_weave_cell(), CrimpTargets(thickness_m=0.5e-3), max_runs=6,
                        out=tmp_path / "cal")
     assert not result.reached
-    assert "lower the target" in result.reason or "max_runs" in result.reason
+    assert "change the target" in result.reason or "max_runs" in result.reason
 
 
 @pytest.mark.parametrize("targets,words", [
-    (dict(thickness_m=-1e-3), "targets.thickness_m must be > 0"),
+    (dict(thickness_m=-1e-3), "calibrate.thickness_m must be > 0"),
     (dict(thickness_m=5e-3), "not below the loose fabric"),
-    (dict(crimp_pct={"weft": -1.0}), "targets.crimp_pct.weft must be >= 0"),
+    (dict(crimp_pct={"weft": -1.0}), "calibrate.crimp_pct.weft must be >= 0"),
     (dict(crimp_pct={"binder": 1.0}), "the fabric has"),
 ])
 def test_bad_targets_fail_before_lammps(tmp_path, targets, words):

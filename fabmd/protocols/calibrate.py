@@ -278,12 +278,12 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
                           f"{s_best:+.4f} on {'+'.join(knob.families)}, target "
                           f"{knob.text(knob.target)}; widen calibrate.strain_range")
         return new, ""
-    # 3. flat: the neighbours of the best differ from it by less than the tolerance (slack
-    # yarns carry no tension whatever their expansion): go the way the physics says,
-    # beyond the samples, with a step as wide as the range tried
+    # 3. flat: every sample within the tolerance of the others (slack yarns carry no
+    # tension whatever their expansion): go the way the physics says, beyond the
+    # samples, with a step as wide as the range tried
     prior = -sigma * knob.sign
-    near = [pts[i][1] for i in (best - 1, best + 1) if 0 <= i < len(pts)]
-    if all(abs(q - q_best) < knob.tolerance for q in near):
+    values = [q for _, q in pts]
+    if max(values) - min(values) < knob.tolerance:
         edge = pts[0][0] if prior < 0 else pts[-1][0]
         step = min(max(knob.first_step, pts[-1][0] - pts[0][0]), 0.1)
         new = _grid(min(max(edge + prior * step, lo), hi))
@@ -315,7 +315,8 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
         return new, ""
     # 5. best inside: the response turns between its neighbours; find the turning point
     (s_l, q_l), (s_r, q_r) = pts[best - 1], pts[best + 1]
-    if s_r - s_l < 2 * MIN_STRAIN_WIDTH:
+    resolved = max(abs(q_l - q_best), abs(q_r - q_best)) < knob.tolerance
+    if s_r - s_l < 2 * MIN_STRAIN_WIDTH or resolved:  # the turn known to the tolerance
         way = "lowest" if (q_best < q_l and q_best < q_r) else "highest"
         why = {("thickness", "lowest"): "more shrink makes the fabric thicker again (the "
                "yarns rise over each other instead of pressing together)",
@@ -407,10 +408,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                                    minimum=2)
     fams = tuple(thickness_families or targets.thickness_families
                  or default_thickness_families(model))
-    knobs, uncontrolled = make_knobs(model, targets, base, fams)
-    measure = _compaction(targets, compaction)
-    if measure is not None:
-        measure.input_text(model)  # a cell the platens can close on, before LAMMPS starts
+    knobs, uncontrolled, measure = check_targets(model, targets, base, fams, compaction)
     root = prepare_run_folder(out, overwrite=overwrite, prefix="calibration")
     runs: list[dict] = []
     results: dict[int, CrimpResult] = {}
@@ -519,6 +517,21 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                              summary["reason"], summary["runs"], results[best_run["run"]],
                              root, controlled_reached=controlled,
                              best_run=best_run["run"], summary=summary)
+
+
+def check_targets(model: BeadModel, targets: CrimpTargets, base: Crimp,
+                  fams: tuple[str, ...], compaction=None):
+    """Every check of :func:`calibrate` that needs no LAMMPS: (knobs searched, targets only
+    reported, the compaction that measures a thickness under pressure or None).
+
+    Raises:
+        InputError: the first impossible target (module docstring).
+    """
+    knobs, uncontrolled = make_knobs(model, targets, base, fams)
+    measure = _compaction(targets, compaction)
+    if measure is not None:
+        measure.input_text(model)  # a cell the platens can close on
+    return knobs, uncontrolled, measure
 
 
 def _closest(knob: Knob) -> tuple[float, float]:
