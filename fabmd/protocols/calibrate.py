@@ -318,8 +318,7 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
     resolved = max(abs(q_l - q_best), abs(q_r - q_best)) < knob.tolerance
     if s_r - s_l < 2 * MIN_STRAIN_WIDTH or resolved:  # the turn known to the tolerance
         way = "lowest" if (q_best < q_l and q_best < q_r) else "highest"
-        why = {("thickness", "lowest"): "more shrink makes the fabric thicker again (the "
-               "yarns rise over each other instead of pressing together)",
+        why = {("thickness", "lowest"): "more shrink makes the fabric thicker again",
                ("thickness", "highest"): "less shrink makes the fabric thinner again"}.get(
             (knob.kind, way), "the response turns there")
         return None, (f"{knob.name}: cannot reach {knob.text(knob.target)}: the {way} value "
