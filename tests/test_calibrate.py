@@ -114,6 +114,16 @@ def test_search_says_where_the_response_turns_when_the_target_is_below_its_botto
     assert f"{1e3 * best[1]:.4g} mm" in why
 
 
+def test_a_flat_bottom_is_named_the_lowest_value():
+    """The twill example's free thickness: the loose thickness over a range of shrinks,
+    thicker with more shrink and with expansion (measured: 0.5327 mm from -0.0081 to
+    -0.003, 0.5434 mm at -0.01, 0.5769 mm at +0.0097)."""
+    knob = thickness_knob(0.5e-3)
+    runs, why = drive(knob, lambda s: 0.5327e-3 + 0.5e-3 * max(0.0, -0.009 - s, s - 0.002))
+    assert "cannot reach 0.5 mm: the lowest value the strain gives is 0.5327 mm" in why
+    assert "more shrink makes the fabric thicker again" in why
+
+
 def test_search_turns_round_when_shrink_makes_the_fabric_thicker():
     """The issue's commingled fabric: one-row yarns got thicker with every shrink."""
     knob = thickness_knob(0.97e-3)
@@ -313,3 +323,41 @@ def test_unreachable_target_says_why_with_numbers(tmp_path, capsys):
     cal = json.loads((out / "calibration.json").read_text())
     assert not cal["reached"] and cal["reason"] in err
     assert not (out / "calibrated.toml").exists()
+
+
+TWO_KNOBS = ('\n[calibrate]\nthickness_m = "1.0 mm"\nthickness_families = ["warp"]\n'
+             'target_tension = { weft = "0.5 N" }\nmax_runs = 12\n')
+
+
+@pytest.mark.lammps
+@pytest.mark.slow  # the final crimp draws its figures
+def test_coupled_knobs_reach_thickness_and_tension_together(tmp_path, capsys):
+    out = tmp_path / "cal"
+    code, text, err = cli(capsys, "calibrate", str(scene_file(tmp_path, TWO_KNOBS)),
+                          "--out", str(out), "--np", "1", "--quiet")
+    assert code == 0, err
+    cal = json.loads((out / "calibration.json").read_text())
+    assert cal["reached"] and [k["name"] for k in cal["knobs"]] == ["thickness",
+                                                                     "tension:weft"]
+    assert cal["achieved"]["thickness"] == pytest.approx(1.0e-3, rel=0.02)
+    assert cal["achieved"]["tension:weft"] == pytest.approx(0.5, rel=0.05)
+    # the warp strain serves the thickness, the weft strain the tension
+    assert cal["expansion"]["warp"] != cal["expansion"]["weft"]
+    assert len(cal["sensitivity"]["matrix"]) == 2
+
+
+@pytest.mark.lammps
+@pytest.mark.slow  # the final crimp draws its figures
+def test_tension_on_the_thickness_families_is_reported_not_controlled(tmp_path, capsys):
+    extra = '\n[calibrate]\nthickness_m = "1.0 mm"\ntarget_tension = "5 N"\n'
+    out = tmp_path / "cal"
+    code, text, err = cli(capsys, "calibrate", str(scene_file(tmp_path, extra)),
+                          "--out", str(out), "--np", "1", "--quiet")
+    assert code == 3
+    assert "tension:warp: not controlled (the warp expansion serves the thickness" in err
+    assert "free a family with calibrate.thickness_families" in err
+    cal = json.loads((out / "calibration.json").read_text())
+    assert cal["controlled_reached"] and not cal["reached"]
+    assert [k["name"] for k in cal["uncontrolled"]] == ["tension:warp", "tension:weft"]
+    # what can be calibrated is: the thickness, written back
+    assert (out / "calibrated.toml").exists()

@@ -40,8 +40,16 @@ sides: e.g. one-row yarns that get thicker again with more shrink) is searched f
 turning point by golden-section steps; if the turning value misses the target, the knob
 is stopped with the range tried, the best value and where the response turned. A knob
 stuck at its strain limit (a shrink at most the family's loose crimp: more pulls the
-yarns straight, not woven; ``strain_range`` overrides) is stopped likewise. The other
-knobs go on (what can be calibrated is); ``max_runs`` bounds the whole search.
+yarns straight, not woven; ``strain_range`` overrides) is stopped likewise.
+
+**Several knobs** move each other's quantities (in the test cell the weft shrink that sets
+the weft tension also thickens the fabric, and more warp shrink made it thicker, not
+thinner): :class:`CoupledSearch` moves each knob alone once (a finite-difference column of
+the sensitivities), then takes Newton steps on all of them from the best run (at most 0.05
+strain per knob, halved after a step that made things worse, sensitivities corrected after
+every step, Broyden); where it cannot go on it says so with the closest values. Once one
+knob has stopped, the others continue with the one-knob search (what can be calibrated
+is). ``max_runs`` bounds the whole search.
 """
 
 from __future__ import annotations
@@ -317,7 +325,7 @@ def next_strain(knob: Knob) -> tuple[float | None, str]:
     (s_l, q_l), (s_r, q_r) = pts[best - 1], pts[best + 1]
     resolved = max(abs(q_l - q_best), abs(q_r - q_best)) < knob.tolerance
     if s_r - s_l < 2 * MIN_STRAIN_WIDTH or resolved:  # the turn known to the tolerance
-        way = "lowest" if (q_best < q_l and q_best < q_r) else "highest"
+        way = "lowest" if err[best] > 0 else "highest"  # the turn short of the target
         why = {("thickness", "lowest"): "more shrink makes the fabric thicker again",
                ("thickness", "highest"): "less shrink makes the fabric thinner again"}.get(
             (knob.kind, way), "the response turns there")
@@ -339,6 +347,79 @@ def _old_slope(knob: Knob) -> float | None:
             if c1 == c0 and s1 != s0:
                 return (q1 - q0) / (s1 - s0) or None
     return None
+
+
+class CoupledSearch:
+    """Several knobs whose quantities all move with every strain (the warp shrink sets the
+    thickness, the weft's moves it too): each knob is first moved alone (its first step),
+    which measures one column of the sensitivity J = d quantity / d strain (in tolerances
+    per unit strain); then Newton steps from the best run, J Δs = −e, at most 0.05 per knob,
+    halved after a step that made things worse; J is corrected after each step (Broyden).
+    Brackets, turns and flat ranges are the one-knob search's (:func:`next_strain`)."""
+
+    def __init__(self, n: int):
+        import numpy as np
+
+        self.jac = np.full((n, n), np.nan)
+        self.pending: tuple | None = None  # (knob moved alone, strains, errors before)
+        self.newton: tuple | None = None   # (strains, errors) the last Newton step left
+        self.damping = 1.0
+        self.history: list = []  # (strains, errors in tolerances) of every run
+
+    def describe(self, knobs: list[Knob]) -> dict | None:
+        if len(knobs) < 2:
+            return None
+        return {"note": "d quantity / d strain, in tolerances per unit strain (rows: "
+                        "quantities, columns: knobs)",
+                "knobs": [kn.name for kn in knobs],
+                "matrix": [[None if v != v else float(v) for v in row] for row in self.jac]}
+
+    def step(self, knobs: list[Knob]) -> tuple[list[float] | None, str]:
+        import numpy as np
+
+        s = np.array([kn.value for kn in knobs])
+        e = np.array([kn.error(kn.samples[-1][1]) / kn.tolerance for kn in knobs])
+        self.history.append((s, e))
+        if self.pending is not None:  # the last run moved knob i alone: column i
+            i, s0, e0 = self.pending
+            self.jac[:, i] = (e - e0) / (s[i] - s0[i])
+            self.pending = None
+        if self.newton is not None:  # Broyden: J Δs must give the Δe measured
+            s0, e0 = self.newton
+            ds, de = s - s0, e - e0
+            if ds @ ds > 0:
+                self.jac += np.outer(de - self.jac @ ds, ds) / (ds @ ds)
+            self.newton = None
+        missing = [i for i in range(len(knobs)) if np.isnan(self.jac[0, i])]
+        if missing:
+            i = missing[0]
+            knob = knobs[i]
+            direction = -1 if e[i] * knob.sign > 0 else 1
+            lo, hi = knob.bounds
+            new = s.copy()
+            new[i] = _grid(min(max(s[i] + direction * knob.first_step, lo), hi))
+            if new[i] == s[i]:
+                new[i] = _grid(min(max(s[i] - direction * knob.first_step, lo), hi))
+            self.pending = (i, s, e)
+            return [float(v) for v in new], ""
+        best = min(range(len(self.history)), key=lambda k: np.abs(self.history[k][1]).max())
+        s_best, e_best = self.history[best]
+        self.damping = 1.0 if best == len(self.history) - 1 else 0.5 * self.damping
+        ds, *_ = np.linalg.lstsq(self.jac, -e_best, rcond=None)
+        ds *= self.damping * min(1.0, 0.05 / max(float(np.abs(ds).max()), 1e-12))
+        new = np.array([_grid(min(max(s_best[k] + ds[k], kn.bounds[0]), kn.bounds[1]))
+                        for k, kn in enumerate(knobs)])
+        if np.abs(new - s_best).max() < 10 * STRAIN_RESOLUTION or self.damping < 1 / 16:
+            names = ", ".join(f"{kn.name} {kn.text(kn.target + e_best[k] * kn.tolerance)}"
+                              for k, kn in enumerate(knobs))
+            stuck = ("no longer improves" if self.damping < 1 / 16
+                     else "leaves the strain range")
+            return None, (f"the coupled targets ({', '.join(kn.name for kn in knobs)}) "
+                          f"cannot be met together from strains "
+                          f"{', '.join(f'{v:+.4f}' for v in s_best)}: closest {names}; the "
+                          f"Newton step {stuck} (sensitivities in calibration.json)")
+        self.newton = (s_best, e_best)
+        return [float(v) for v in new], ""
 
 
 def _grid(strain: float) -> float:
@@ -409,6 +490,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                  or default_thickness_families(model))
     knobs, uncontrolled, measure = check_targets(model, targets, base, fams, compaction)
     root = prepare_run_folder(out, overwrite=overwrite, prefix="calibration")
+    coupled = CoupledSearch(len(knobs))
     runs: list[dict] = []
     results: dict[int, CrimpResult] = {}
     for k in range(1, max_runs + 1):
@@ -455,17 +537,23 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                 knob.verdict = "reached" if knob.converged(q) else ""
         if on_run is not None:
             on_run(record)
-        # move one knob per run, the one farthest off: each knob's samples then differ in
-        # its own strain only (the thickness of the warp shrink also moves with the weft's)
-        searching = sorted((kn for kn in knobs if not kn.verdict),
-                           key=lambda kn: -abs(kn.error(kn.samples[-1][1])) / kn.tolerance)
-        for knob in searching:
-            new, why = next_strain(knob)
+        if len(knobs) == 1 or any(kn.verdict and kn.verdict != "reached" for kn in knobs):
+            # one knob (or the others stopped): the one-dimensional search, which knows
+            # brackets, turns and flat ranges
+            for knob in knobs:
+                if not knob.verdict:
+                    new, why = next_strain(knob)
+                    knob.verdict, knob.value = (why, knob.value) if new is None else ("", new)
+        elif not all(kn.verdict == "reached" for kn in knobs):
+            # coupled knobs (the weft shrink moves the thickness too): finite differences,
+            # one knob at a time, give the sensitivities; then Newton steps (Broyden)
+            new, why = coupled.step(knobs)
             if new is None:
-                knob.verdict = why
-                continue
-            knob.value = new
-            break
+                for knob in knobs:
+                    knob.verdict = knob.verdict if knob.verdict == "reached" else why
+            else:
+                for knob, value in zip(knobs, new, strict=True):
+                    knob.value = value
         if not any(not kn.verdict for kn in knobs):
             break
     for knob in knobs:
@@ -508,6 +596,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                     f"{targets.at_pressure_pa:g} Pa (compaction to that pressure)"
                     if measure is not None else "free thickness of the crimped cell"),
         "runs": runs,
+        "sensitivity": coupled.describe(knobs),
         "wall_s": sum(r["wall_s"] for r in runs),
     }
     write_json(root / "calibration.json", summary)
