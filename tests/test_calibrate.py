@@ -361,3 +361,20 @@ def test_tension_on_the_thickness_families_is_reported_not_controlled(tmp_path, 
     assert [k["name"] for k in cal["uncontrolled"]] == ["tension:warp", "tension:weft"]
     # what can be calibrated is: the thickness, written back
     assert (out / "calibrated.toml").exists()
+
+
+def test_a_failed_run_is_recorded_and_stops_the_search(tmp_path, capsys, monkeypatch):
+    from fabmd.errors import UnstableRun
+    from fabmd.protocols.crimp import Crimp
+
+    def blow_up(self, model, out=None, **kwargs):
+        raise UnstableRun("bond stretch guard tripped", run_dir=out, cause="bond_stretch")
+
+    monkeypatch.setattr(Crimp, "run", blow_up)
+    path = scene_file(tmp_path, '\n[calibrate]\nthickness_m = "1 mm"\n')
+    code, out, err = cli(capsys, "calibrate", str(path), "--out", str(tmp_path / "o"))
+    assert code == 3 and "run 1 failed at strains -0.0100" in err, err
+    assert "bond stretch guard tripped" in err
+    cal = json.loads((tmp_path / "o" / "calibration.json").read_text())
+    assert cal["runs"][0]["failed"] and not cal["reached"]
+    assert not (tmp_path / "o" / "calibrated.toml").exists()

@@ -62,7 +62,7 @@ from pathlib import Path
 
 from .. import inputs, schema
 from ..engine import Engine, mpi
-from ..errors import InputError
+from ..errors import InputError, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
 from ..results.measure import thickness_m
@@ -501,11 +501,26 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
         t0 = time.perf_counter()
         crimp = dataclasses.replace(base, expansion=expansion)
         folder = root / f"run-{k:02d}"
-        result = crimp.run(model, out=folder / "crimp", engine=engine, figures=False)
-        crimp_wall = time.perf_counter() - t0
-        pressed = None
-        if measure is not None:
-            pressed = measure.run(result.model, out=folder / "compaction", engine=engine)
+        try:
+            result = crimp.run(model, out=folder / "crimp", engine=engine, figures=False)
+            crimp_wall = time.perf_counter() - t0
+            pressed = None
+            if measure is not None:
+                pressed = measure.run(result.model, out=folder / "compaction", engine=engine)
+        except SimulationFailed as exc:  # recorded; the search stops there
+            runs.append({"run": k, "expansion": expansion,
+                         "knobs": {kn.name: kn.value for kn in knobs},
+                         "achieved": {kn.name: None for kn in knobs + uncontrolled},
+                         "wall_s": time.perf_counter() - t0, "failed": str(exc),
+                         "folder": str(folder)})
+            strains = ", ".join(f"{v:+.4f}" for v in runs[-1]["knobs"].values())
+            for knob in knobs:
+                if knob.verdict in ("", "reached"):
+                    knob.verdict = (f"{knob.name}: run {k} failed at strains {strains} "
+                                    f"({exc}); the search stopped there")
+            if on_run is not None:
+                on_run(runs[-1])
+            break
         achieved = _achieved(result, pressed, knobs + uncontrolled, targets)
         record = {"run": k, "expansion": expansion,
                   "knobs": {kn.name: kn.value for kn in knobs},
@@ -562,11 +577,9 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                             f"(raise calibrate.max_runs); closest "
                             f"{knob.text(_closest(knob)[1])} at {_closest(knob)[0]:+.4f}")
     best_run = min(runs, key=lambda r: _score(r, knobs))
-    controlled = all(kn.converged(best_run["achieved"][kn.name]) for kn in knobs
-                     if best_run["achieved"][kn.name] is not None)
-    controlled = controlled and all(best_run["achieved"][kn.name] is not None for kn in knobs)
     missed = [kn for kn in knobs if best_run["achieved"][kn.name] is None
               or not kn.converged(best_run["achieved"][kn.name])]
+    controlled = not missed
     reasons = [kn.verdict if kn.verdict != "reached" else
                f"{kn.name}: reached in an earlier run but not together with the others"
                for kn in missed]
@@ -602,7 +615,7 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
     write_json(root / "calibration.json", summary)
     summary = mpi.bcast_json(summary)
     return CalibrationResult(summary["expansion"], summary["achieved"], reached,
-                             summary["reason"], summary["runs"], results[best_run["run"]],
+                             summary["reason"], summary["runs"], results.get(best_run["run"]),
                              root, controlled_reached=controlled,
                              best_run=best_run["run"], summary=summary)
 
