@@ -378,3 +378,17 @@ def test_a_failed_run_is_recorded_and_stops_the_search(tmp_path, capsys, monkeyp
     cal = json.loads((tmp_path / "o" / "calibration.json").read_text())
     assert cal["runs"][0]["failed"] and not cal["reached"]
     assert not (tmp_path / "o" / "calibrated.toml").exists()
+
+
+def test_thickness_under_a_pressure_from_a_compaction_summary():
+    from fabmd.protocols.calibrate import thickness_under
+
+    curve = {"pressure_reached": True, "thickness_at_pressure_m": {"4140": 5.22e-4},
+             "contact_pressure_pa": 343.0, "contact_thickness_m": 5.25e-4}
+    assert thickness_under(curve, 4140.0) == 5.22e-4
+    # a taut fabric pushes back harder than the target as soon as both platens carry it
+    # (measured on the twill example at -2.94 %: 5.8 kPa at its first sample)
+    taut = {"pressure_reached": True, "thickness_at_pressure_m": {"4140": None},
+            "contact_pressure_pa": 5769.0, "contact_thickness_m": 7.3461e-4}
+    assert thickness_under(taut, 4140.0) == 7.3461e-4
+    assert thickness_under(dict(curve, pressure_reached=False), 4140.0) is None

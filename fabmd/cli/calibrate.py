@@ -55,8 +55,14 @@ class Table:
             self.started = True
         strains = ", ".join(f"{v:+.4f}" for v in record["knobs"].values())
         values = [_value(n, record["achieved"][n]) for n in names]
+        notes = [text for key, text in (("failed", "run failed"),
+                                        ("pressure_note", "curve starts above the pressure"))
+                 if record.get(key)]
+        if record.get("compaction_quasi_static") is False:
+            notes.append("compaction not quasi-static")
         print(f"{record['run']:3d}  " + "  ".join(f"{v:>24s}" for v in [strains] + values)
-              + f"  {record['wall_s']:5.1f} s", flush=True)
+              + f"  {record['wall_s']:5.1f} s" + (f"  ({'; '.join(notes)})" if notes else ""),
+              flush=True)
 
 
 def _value(name: str, value) -> str:

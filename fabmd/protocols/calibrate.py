@@ -535,6 +535,13 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                   "folder": str(folder)}
         if pressed is not None:
             record["pressure_reached"] = pressed.summary.get("pressure_reached")
+            start = pressed.summary.get("contact_pressure_pa")
+            if start is not None and start >= targets.at_pressure_pa:
+                record["pressure_note"] = (
+                    f"the curve starts at {start:.4g} Pa, above the target pressure: the "
+                    f"thickness there ({pressed.summary['contact_thickness_m']:.6g} m) is "
+                    f"taken (the thickness at the target lies between it and the starting "
+                    f"gap {pressed.summary['starting_gap_m']:.6g} m)")
             record["compaction_quasi_static"] = pressed.summary["quasi_static"]["ok"]
             record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
         runs.append(record)
@@ -740,11 +747,24 @@ def _achieved(result: CrimpResult, pressed, knobs: list[Knob],
             if pressed is None:
                 out[knob.name] = crimped["thickness_m"]
             else:
-                s = pressed.summary
-                at = s["thickness_at_pressure_m"].get(f"{targets.at_pressure_pa:g}")
-                out[knob.name] = at if s.get("pressure_reached") else None
+                out[knob.name] = thickness_under(pressed.summary, targets.at_pressure_pa)
         elif knob.kind == "crimp":
             out[knob.name] = crimped["crimp_pct"][fam]
         else:
             out[knob.name] = result.summary["yarn_tension"][fam]["yarn_n"]
     return out
+
+
+def thickness_under(summary: dict, pressure_pa: float) -> float | None:
+    """The thickness [m] at ``pressure_pa`` from a compaction summary that stopped there:
+    the loading curve's; where the fabric already pushed back harder than that when the
+    platens first both carried it (a taut fabric: its curve starts above the pressure),
+    the thickness there, ``contact_thickness_m`` (the thickness at the lower pressure lies
+    between it and the starting gap); None where the pressure was not reached."""
+    if not summary.get("pressure_reached"):
+        return None
+    at = summary["thickness_at_pressure_m"].get(f"{pressure_pa:g}")
+    start = summary.get("contact_pressure_pa")
+    if at is None and start is not None and start >= pressure_pa:
+        return summary.get("contact_thickness_m")
+    return at
