@@ -96,8 +96,8 @@ class Compaction:
         time_step: time-step policy.
         samples: output intervals over the full loading travel (>= 10).
         unload: go back up after the turn (default); False ends the run at the
-            pressure (the calibration reads the thickness there and needs no unloading,
-            which would cost as many steps again).
+            pressure — once both platens carry it — (the calibration reads the thickness
+            there and needs no unloading, which would cost as many steps again).
     """
 
     max_pressure_pa: float = 2e5
@@ -196,7 +196,11 @@ class Compaction:
             overlap_monitor=blocks.overlap_monitor(model, self.contact, beads, every=every,
                                                    tool_fixes=("bottom", "top")),
             guards=blocks.guards(model, dt), max_steps=steps,
-            settle_steps=self.settle_steps(model))
+            settle_steps=self.settle_steps(model),
+            # without unloading the run ends at the pressure, so both platens must carry
+            # it (a platen striking one bead first reads it alone, for an interval)
+            halt_pressure="f_means[1]" if self.unload else
+            '"ternary(f_means[1]<f_means[2],f_means[1],f_means[2])"')
         if self.unload:
             text += render("compaction_unload", speed=self.speed_m_s(model),
                            settle_steps=self.settle_steps(model))
