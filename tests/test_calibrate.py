@@ -9,7 +9,7 @@ import tomllib
 import pytest
 
 from fabmd.errors import CalibrationNotReached, InputError
-from fabmd.protocols.calibrate import Knob, next_strain
+from fabmd.protocols.calibrate_search import Knob, next_strain
 
 TINY = """title = "tiny plain weave for calibration tests"
 

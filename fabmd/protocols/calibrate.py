@@ -67,14 +67,14 @@ from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
 from ..results.measure import thickness_m
 from ..scene.outputs import TrajectoryOutput
+from .calibrate_search import (
+    STRAIN_LIMIT,
+    CoupledSearch,
+    Knob,
+    next_strain,
+    on_grid,
+)
 from .crimp import Crimp, CrimpResult
-
-#: the largest shrink or expansion the calibration tries (where no loose crimp bounds it)
-STRAIN_LIMIT = 0.4
-#: strains are tried on this grid (so that the scene file gets short, exact numbers)
-STRAIN_RESOLUTION = 1e-5
-#: a bracket or a turn narrower than this (in strain) is not refined further
-MIN_STRAIN_WIDTH = 2e-3
 
 
 @dataclass(frozen=True)
@@ -196,234 +196,6 @@ def targets_from_scene(scene, settings: dict | None = None) -> tuple[CrimpTarget
                      f"{1e3 * fabric.thickness_m:.4g} mm{at}")
     targets = schema.build(CrimpTargets, table, "calibrate", where=where)
     return targets, notes
-
-
-@dataclass
-class Knob:
-    """One scalar unknown: a strain applied to ``families`` and the quantity it sets.
-
-    ``kind``: ``thickness`` [m], ``crimp`` [%] or ``tension`` [N per yarn]; ``sign``: +1
-    when the quantity is expected to grow with the strain, −1 when it falls (the first
-    step only; the search then follows what it measures).
-    """
-
-    name: str
-    kind: str
-    families: tuple[str, ...]
-    target: float
-    tolerance: float
-    sign: int
-    bounds: tuple[float, float]
-    value: float
-    first_step: float = 0.03
-    samples: list = field(default_factory=list)  # (strain, quantity, other knobs' strains)
-    verdict: str = ""  # "" searching, "reached", or why it stopped
-
-    def error(self, q: float) -> float:
-        return q - self.target
-
-    def converged(self, q: float) -> bool:
-        return abs(self.error(q)) <= self.tolerance
-
-    def text(self, q: float | None) -> str:
-        """A quantity in the knob's display unit."""
-        if q is None:
-            return "–"
-        if self.kind == "thickness":
-            return f"{1e3 * q:.4g} mm"
-        return f"{q:.4g} %" if self.kind == "crimp" else f"{q:.4g} N"
-
-    def describe(self) -> dict:
-        return {"name": self.name, "kind": self.kind, "families": list(self.families),
-                "target": self.target, "tolerance": self.tolerance,
-                "strain_range": list(self.bounds), "verdict": self.verdict,
-                "samples": [{"strain": s, "value": q} for s, q, _ in self.samples]}
-
-
-def next_strain(knob: Knob) -> tuple[float | None, str]:
-    """The next strain to try for ``knob`` from its samples, or (None, why) when no strain
-    in its range can reach the target (module docstring: bracket, secant, turn)."""
-    by_strain: dict[float, float] = {}
-    context = knob.samples[-1][2]
-    for s, q, c in knob.samples:
-        if c == context:  # taken with the other knobs where they are now
-            by_strain[s] = q  # a strain tried twice: its latest value
-    pts = sorted(by_strain.items())
-    err = [knob.error(q) for _, q in pts]
-    best = min(range(len(pts)), key=lambda i: abs(err[i]))
-    lo, hi = knob.bounds
-    tried = f"strains {pts[0][0]:+.4f} to {pts[-1][0]:+.4f} tried on {'+'.join(knob.families)}"
-    best_text = (f"closest {knob.text(pts[best][1])} at {pts[best][0]:+.4f} "
-                 f"(target {knob.text(knob.target)} ± {knob.text(knob.tolerance)})")
-    # 1. bracketed: two neighbouring samples on both sides of the target
-    brackets = [i for i in range(len(pts) - 1) if err[i] * err[i + 1] < 0]
-    if brackets:
-        i = min(brackets, key=lambda j: min(abs(j - best), abs(j + 1 - best)))
-        (s0, q0), (s1, q1) = pts[i], pts[i + 1]
-        e0, e1 = err[i], err[i + 1]
-        width = s1 - s0
-        if width < MIN_STRAIN_WIDTH:
-            return None, (f"{knob.name}: the response jumps from {knob.text(q0)} at "
-                          f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
-                          f"{knob.text(knob.target)}: no strain in between reaches it within "
-                          f"± {knob.text(knob.tolerance)} ({tried})")
-        new = s0 - e0 * width / (e1 - e0)
-        return _grid(min(max(new, s0 + 0.2 * width), s1 - 0.2 * width)), ""
-    # 2. one sample: a first step the way the quantity should move
-    sigma = 1 if err[best] > 0 else -1
-    s_best, q_best = pts[best]
-    if len(pts) == 1:
-        step = knob.first_step
-        slope = _old_slope(knob)  # from before the other knobs moved, where there is one
-        if slope:
-            step = min(max(abs(err[best] / slope), 10 * STRAIN_RESOLUTION), 0.1)
-            direction = -1 if err[best] * slope > 0 else 1
-        else:
-            direction = -sigma * knob.sign
-        new = _grid(min(max(s_best + direction * step, lo), hi))
-        if new == s_best:
-            return None, (f"{knob.name}: {knob.text(q_best)} at the strain limit "
-                          f"{s_best:+.4f} on {'+'.join(knob.families)}, target "
-                          f"{knob.text(knob.target)}; widen calibrate.strain_range")
-        return new, ""
-    # 3. flat: every sample within the tolerance of the others (slack yarns carry no
-    # tension whatever their expansion): go the way the physics says, beyond the
-    # samples, with a step as wide as the range tried
-    prior = -sigma * knob.sign
-    values = [q for _, q in pts]
-    if max(values) - min(values) < knob.tolerance:
-        edge = pts[0][0] if prior < 0 else pts[-1][0]
-        step = min(max(knob.first_step, pts[-1][0] - pts[0][0]), 0.1)
-        new = _grid(min(max(edge + prior * step, lo), hi))
-        if new == edge:
-            return None, (f"{knob.name}: the quantity hardly moves ({knob.text(pts[0][1])} "
-                          f"at {pts[0][0]:+.4f}, {knob.text(pts[-1][1])} at "
-                          f"{pts[-1][0]:+.4f}) up to the strain limit {edge:+.4f}; "
-                          f"{best_text}; widen calibrate.strain_range or change the target")
-        return new, ""
-    # 4. best at an end of the range tried: go on outwards (secant, limited step)
-    if best in (0, len(pts) - 1):
-        j = 1 if best == 0 else len(pts) - 2
-        outward = -1 if best == 0 else 1
-        s_j, q_j = pts[j]
-        gap = abs(s_best - s_j)
-        slope = (q_best - q_j) / (s_best - s_j)
-        step = abs(err[best] / slope) if slope else knob.first_step
-        step = min(max(step, 0.25 * gap, STRAIN_RESOLUTION * 10), max(2 * gap, knob.first_step),
-                   0.1)
-        new = _grid(min(max(s_best + outward * step, lo), hi))
-        if new == s_best:
-            limit = "shrink" if outward < 0 else "expansion"
-            why = (" (a shrink beyond the loose crimp pulls the yarns straight: not a "
-                   "woven state)" if outward < 0 and knob.kind != "tension" else "")
-            return None, (f"{knob.name}: not reached at the {limit} limit {s_best:+.4f}{why}; "
-                          f"{best_text}; {tried}, the quantity still moving towards the "
-                          f"target ({knob.text(q_j)} at {s_j:+.4f}): widen "
-                          f"calibrate.strain_range or change the target")
-        return new, ""
-    # 5. best inside: the response turns between its neighbours; find the turning point
-    (s_l, q_l), (s_r, q_r) = pts[best - 1], pts[best + 1]
-    resolved = max(abs(q_l - q_best), abs(q_r - q_best)) < knob.tolerance
-    if s_r - s_l < 2 * MIN_STRAIN_WIDTH or resolved:  # the turn known to the tolerance
-        way = "lowest" if err[best] > 0 else "highest"  # the turn short of the target
-        why = {("thickness", "lowest"): "more shrink makes the fabric thicker again",
-               ("thickness", "highest"): "less shrink makes the fabric thinner again"}.get(
-            (knob.kind, way), "the response turns there")
-        return None, (f"{knob.name}: cannot reach {knob.text(knob.target)}: the {way} value "
-                      f"the strain gives is {knob.text(q_best)} at {s_best:+.4f} "
-                      f"({knob.text(q_l)} at {s_l:+.4f}, {knob.text(q_r)} at {s_r:+.4f}): "
-                      f"{why}; {tried}")
-    left, right = s_best - s_l, s_r - s_best
-    golden = 0.381966
-    new = s_best + golden * right if right >= left else s_best - golden * left
-    return _grid(new), ""
-
-
-def _old_slope(knob: Knob) -> float | None:
-    """d quantity / d strain from the latest two samples of one context (None: none)."""
-    for i in range(len(knob.samples) - 1, 0, -1):
-        for j in range(i - 1, -1, -1):
-            (s1, q1, c1), (s0, q0, c0) = knob.samples[i], knob.samples[j]
-            if c1 == c0 and s1 != s0:
-                return (q1 - q0) / (s1 - s0) or None
-    return None
-
-
-class CoupledSearch:
-    """Several knobs whose quantities all move with every strain (the warp shrink sets the
-    thickness, the weft's moves it too): each knob is first moved alone (its first step),
-    which measures one column of the sensitivity J = d quantity / d strain (in tolerances
-    per unit strain); then Newton steps from the best run, J Δs = −e, at most 0.05 per knob,
-    halved after a step that made things worse; J is corrected after each step (Broyden).
-    Brackets, turns and flat ranges are the one-knob search's (:func:`next_strain`)."""
-
-    def __init__(self, n: int):
-        import numpy as np
-
-        self.jac = np.full((n, n), np.nan)
-        self.pending: tuple | None = None  # (knob moved alone, strains, errors before)
-        self.newton: tuple | None = None   # (strains, errors) the last Newton step left
-        self.damping = 1.0
-        self.history: list = []  # (strains, errors in tolerances) of every run
-
-    def describe(self, knobs: list[Knob]) -> dict | None:
-        if len(knobs) < 2:
-            return None
-        return {"note": "d quantity / d strain, in tolerances per unit strain (rows: "
-                        "quantities, columns: knobs)",
-                "knobs": [kn.name for kn in knobs],
-                "matrix": [[None if v != v else float(v) for v in row] for row in self.jac]}
-
-    def step(self, knobs: list[Knob]) -> tuple[list[float] | None, str]:
-        import numpy as np
-
-        s = np.array([kn.value for kn in knobs])
-        e = np.array([kn.error(kn.samples[-1][1]) / kn.tolerance for kn in knobs])
-        self.history.append((s, e))
-        if self.pending is not None:  # the last run moved knob i alone: column i
-            i, s0, e0 = self.pending
-            self.jac[:, i] = (e - e0) / (s[i] - s0[i])
-            self.pending = None
-        if self.newton is not None:  # Broyden: J Δs must give the Δe measured
-            s0, e0 = self.newton
-            ds, de = s - s0, e - e0
-            if ds @ ds > 0:
-                self.jac += np.outer(de - self.jac @ ds, ds) / (ds @ ds)
-            self.newton = None
-        missing = [i for i in range(len(knobs)) if np.isnan(self.jac[0, i])]
-        if missing:
-            i = missing[0]
-            knob = knobs[i]
-            direction = -1 if e[i] * knob.sign > 0 else 1
-            lo, hi = knob.bounds
-            new = s.copy()
-            new[i] = _grid(min(max(s[i] + direction * knob.first_step, lo), hi))
-            if new[i] == s[i]:
-                new[i] = _grid(min(max(s[i] - direction * knob.first_step, lo), hi))
-            self.pending = (i, s, e)
-            return [float(v) for v in new], ""
-        best = min(range(len(self.history)), key=lambda k: np.abs(self.history[k][1]).max())
-        s_best, e_best = self.history[best]
-        self.damping = 1.0 if best == len(self.history) - 1 else 0.5 * self.damping
-        ds, *_ = np.linalg.lstsq(self.jac, -e_best, rcond=None)
-        ds *= self.damping * min(1.0, 0.05 / max(float(np.abs(ds).max()), 1e-12))
-        new = np.array([_grid(min(max(s_best[k] + ds[k], kn.bounds[0]), kn.bounds[1]))
-                        for k, kn in enumerate(knobs)])
-        if np.abs(new - s_best).max() < 10 * STRAIN_RESOLUTION or self.damping < 1 / 16:
-            names = ", ".join(f"{kn.name} {kn.text(kn.target + e_best[k] * kn.tolerance)}"
-                              for k, kn in enumerate(knobs))
-            stuck = ("no longer improves" if self.damping < 1 / 16
-                     else "leaves the strain range")
-            return None, (f"the coupled targets ({', '.join(kn.name for kn in knobs)}) "
-                          f"cannot be met together from strains "
-                          f"{', '.join(f'{v:+.4f}' for v in s_best)}: closest {names}; the "
-                          f"Newton step {stuck} (sensitivities in calibration.json)")
-        self.newton = (s_best, e_best)
-        return [float(v) for v in new], ""
-
-
-def _grid(strain: float) -> float:
-    return round(round(strain / STRAIN_RESOLUTION) * STRAIN_RESOLUTION, 10)
 
 
 @dataclass
@@ -683,7 +455,7 @@ def _bounds(model: BeadModel, targets: CrimpTargets, fams: tuple[str, ...],
     crimps = [loose[f] for f in fams if isinstance(loose.get(f), int | float)]
     if kind == "tension" or not crimps:
         return (-STRAIN_LIMIT, STRAIN_LIMIT)
-    return (_grid(-min(min(crimps), STRAIN_LIMIT)), STRAIN_LIMIT)
+    return (on_grid(-min(min(crimps), STRAIN_LIMIT)), STRAIN_LIMIT)
 
 
 def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
@@ -717,13 +489,13 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
         start = start if start < 0 else -0.03
         knobs.append(Knob("thickness", "thickness", fams, targets.thickness_m,
                           targets.thickness_tolerance * targets.thickness_m, +1, bounds,
-                          _grid(min(max(start, bounds[0]), bounds[1]))))
+                          on_grid(min(max(start, bounds[0]), bounds[1]))))
     thickness_fams = set(fams) if targets.thickness_m is not None else set()
     for fam, crimp_target in targets.crimp_pct.items():
         bounds = _bounds(model, targets, (fam,), "crimp")
         knob = Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
                     targets.crimp_tolerance_pct, +1, bounds,
-                    _grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
+                    on_grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
                     first_step=0.01)
         (uncontrolled if fam in thickness_fams else knobs).append(knob)
     for fam, newtons in sorted(tensions.items()):
@@ -731,7 +503,7 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
         stiffness = yarn_axial_stiffness_n(model, fam)
         knob = Knob(f"tension:{fam}", "tension", (fam,), newtons,
                     targets.tension_tolerance * newtons, -1, bounds,
-                    _grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
+                    on_grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
                     first_step=min(max(newtons / stiffness, 2e-3), 0.03))
         (uncontrolled if fam in thickness_fams else knobs).append(knob)
     return knobs, uncontrolled
