@@ -99,7 +99,8 @@ def section(store: dict) -> str:
                f"({ref[a]['median_n_mm']:.3f})" for a in ANGLES]
             + [f"≈ {MEASURED_LOCKING_DEG:g}", "—", "—", "—"]]
     ratio_rows = []
-    for label, rec in store.items():
+    runs = {k: v for k, v in store.items() if not k.startswith("_")}
+    for label, rec in runs.items():
         pf = rec["picture_frame"]
         vals = [pf["f_norm_n_mm"].get(str(a)) for a in ANGLES]
         rows.append([label] + [("—" if v is None else f"{v:.3g}") for v in vals]
@@ -115,10 +116,12 @@ def section(store: dict) -> str:
     text = table(header, rows) + "\n\nSimulated over the measured median "\
         "(\"outside\": beyond the laboratories' range):\n\n"
     text += table(["model"] + [f"{a}°" for a in ANGLES], ratio_rows)
-    notes = [f"- **{label}**: {rec['note']}" for label, rec in store.items()
+    notes = [f"- **{label}**: {rec['note']}" for label, rec in runs.items()
              if rec.get("note")]
     if notes:
         text += "\n\n" + "\n".join(notes)
+    if store.get("_reading"):
+        text += "\n\n" + store["_reading"]
     return text
 
 
@@ -133,10 +136,13 @@ def main(argv=None) -> int:
                    help="a finished picture-frame folder to add (with --label)")
     p.add_argument("--label", help="row label (default: the scene's title)")
     p.add_argument("--note", default="", help="one line on how the row was made")
+    p.add_argument("--reading", help="the section's closing paragraph (kept in the store)")
     p.add_argument("--write", action="store_true", help="write the RESULTS.md section")
     args = p.parse_args(argv)
 
     store = json.loads(STORE.read_text()) if STORE.exists() else {}
+    if args.reading:
+        store["_reading"] = args.reading
     if args.folder:
         rec = {"picture_frame": picture_frame_record(args.folder), "note": args.note}
         store[args.label or str(args.folder)] = rec
