@@ -1,0 +1,45 @@
+"""The validation benchmark reads its measured data and marks what lies outside it."""
+
+import importlib.util
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load():
+    spec = importlib.util.spec_from_file_location("validation_bench",
+                                                  ROOT / "benchmarks" / "validation.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["validation_bench"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_measured_ranges_are_ordered_and_cover_the_report_angles():
+    bench = load()
+    ref = bench.measured()
+    assert sorted(ref) == list(bench.ANGLES)
+    for a, r in ref.items():
+        assert r["min_n_mm"] <= r["median_n_mm"] <= r["max_n_mm"], a
+    # the force rises with the angle in every laboratory's median
+    medians = [ref[a]["median_n_mm"] for a in bench.ANGLES]
+    assert medians == sorted(medians)
+
+
+def test_section_marks_values_outside_the_laboratories_range():
+    bench = load()
+    ref = bench.measured()
+    inside = {str(a): ref[a]["median_n_mm"] for a in bench.ANGLES}
+    outside = {str(a): 10 * ref[a]["max_n_mm"] for a in bench.ANGLES}
+
+    def rec(forces):
+        return {"picture_frame": {"f_norm_n_mm": forces, "locking_angle_deg": 40.0,
+                                  "flagged_deg": [[0.0, 5.0]], "n_beads": 10, "wall_s": 1.0}}
+
+    text = bench.section({"in": rec(inside), "out": rec(outside)})
+    ratios = [line for line in text.splitlines() if line.startswith("| in |")
+              or line.startswith("| out |")][-2:]
+    assert "outside" not in ratios[0] and ratios[0].count("| 1 ") == 4
+    assert ratios[1].count("(outside)") == 4
+    assert "0–5°" in text
