@@ -60,6 +60,7 @@ from fabmd.cli.validate import parse_settings  # noqa: E402
 from fabmd.errors import FabmdError, OverlapWarning, RunInterrupted  # noqa: E402
 from fabmd.examples_dir import example_scene  # noqa: E402
 from fabmd.scenefile import Scene, parse_scene  # noqa: E402
+from fabmd.stages import section as stage_section  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = "plain_weave.toml"
@@ -224,14 +225,19 @@ def values_of(test: str, summary: dict, curve: dict) -> dict:
             for p in PRESSURES_KPA}
 
 
+LOOP = re.compile(r"^Loop time of \S+ on \d+ procs for (\d+) steps", re.M)
+
+
 def _steps(summary: dict) -> int | None:
-    s = summary["test_summary"]
-    if s.get("steps") is not None:
-        return int(s["steps"])
-    plan = Path(summary["results"]) / "plan.json"
-    if plan.exists():
-        return int(json.loads(plan.read_text()).get("steps", 0)) or None
-    return None
+    """Time steps the test ran: the sum of LAMMPS's loop lines (a compaction stops at its
+    pressure long before its planned steps), else the summary's planned steps."""
+    log = Path(summary["results"]) / "log.lammps"
+    if log.exists():
+        loops = [int(n) for n in LOOP.findall(log.read_text(errors="replace"))]
+        if loops:
+            return sum(loops)
+    steps = summary["test_summary"].get("steps")
+    return int(steps) if steps is not None else None
 
 
 def run_variant(v: Variant, data: dict, base: dict, root: Path, crimps: dict,
@@ -266,6 +272,46 @@ def run_variant(v: Variant, data: dict, base: dict, root: Path, crimps: dict,
                   if isinstance(verdict, dict) else [],
                   folder=str(out))
     return record
+
+
+def planned_size(v: Variant, data: dict, base: dict) -> tuple[int, int]:
+    """(beads, steps) of a run's test, from its input rendered on the loose periodic
+    cell without LAMMPS (the crimped cell has the same beads; steps are an upper bound
+    for tests that stop early, e.g. compaction)."""
+    from fabmd.engine.script import logical_lines, total_run_steps
+    from fabmd.stages import coupon_stage, periodic_cell, protocol_stage
+
+    scene = build_scene(v, data, base)
+    model = periodic_cell(scene)
+    protocol = protocol_stage(scene, v.test)
+    if v.cells is not None:
+        coupon, _ = coupon_stage(scene, v.test)
+        model = coupon.geometry(model)
+    if hasattr(protocol, "prepare"):
+        model = protocol.prepare(model)
+    return model.n_beads, total_run_steps(logical_lines(protocol.input_text(model)))
+
+
+def estimate(plan: list[tuple[str, Variant]], data: dict, base: dict, store: dict) -> None:
+    """Print beads × steps and a time for each planned run, at the cost per bead-step the
+    study's finished runs of the same test measured (the engine's rough figure where
+    none has run)."""
+    from fabmd.engine.estimate import SECONDS_PER_BEAD_STEP
+
+    runs = store.get("runs", {})
+    seen = set()
+    for _label, v in plan:
+        if v.key in seen:
+            continue
+        seen.add(v.key)
+        done = [r for r in runs.values() if r.get("test") == v.test and "values" in r
+                and r.get("steps")]
+        rate = (sum(r["wall_s"] for r in done) / sum(r["beads"] * r["steps"] for r in done)
+                if done else SECONDS_PER_BEAD_STEP)
+        beads, steps = planned_size(v, data, base)
+        state = "done" if "values" in runs.get(v.key, {}) else "to run"
+        print(f"{v.key:36s} {beads:7d} beads {steps:10d} steps  ~{rate * beads * steps / 60:6.1f}"
+              f" min at {rate:.2g} s/bead-step ({state})", flush=True)
 
 
 def run_study(plan: list[tuple[str, Variant]], data: dict, base: dict, store: dict,
@@ -358,6 +404,8 @@ def runs_table(test: str, runs: dict, base: dict, levels: dict) -> str:
                 continue
             r = runs.get(v.key)
             label = f"{kind} {value:g}"
+            if v == variant(test, ("sd", base["spacing_ratio"]), base):
+                label += " (example)"
             if r is None or "values" not in r:
                 reason = r["not_run"] if r else "not requested in this pass"
                 rows.append([label, v.key, "–", "–", "–", "–",
@@ -403,7 +451,8 @@ def convergence_table(test: str, runs: dict, base: dict) -> str:
 TEST_NOTES = {
     "compaction": "crimped periodic cell between rigid platens (the example's "
                   "[compaction]: to {max_pressure} and back); thickness on the loading "
-                  "branch",
+                  "branch; – where the curve starts above that pressure (the platen's first "
+                  "contact already presses harder)",
     "tension": "coupon tiled from the crimped cell, {tension_len} cells long (the level) × "
                "{tension_width} wide, to the example's 3 %; stiffness and forces per unit "
                "width",
@@ -541,6 +590,8 @@ def main(argv: list[str] | None = None) -> int:
                              "(default: the example's)")
     parser.add_argument("--note", default=None,
                         help="a reading of the table, kept in the JSON and printed under it")
+    parser.add_argument("--estimate", action="store_true",
+                        help="no runs: beads, steps and time of each planned run")
     parser.add_argument("--replot", action="store_true", help="no runs: table from the JSON")
     parser.add_argument("--fresh", action="store_true", help="forget the JSON's runs")
     parser.add_argument("--root", type=Path, default=None, help="folder for the runs")
@@ -561,10 +612,18 @@ def main(argv: list[str] | None = None) -> int:
     store.update(settings=args.set, base=base,
                  max_pressure=str(data.get("compaction", {}).get("max_pressure_pa", "")))
     finished = True
+    if args.estimate:
+        estimate(planned(tests, levels, base), data, base, store)
+        return 0
     if not args.replot:
         root = args.root or Path(tempfile.mkdtemp(prefix="fabmd-convergence-"))
         root.mkdir(parents=True, exist_ok=True)
         finished = run_study(planned(tests, levels, base), data, base, store, data_path, root)
+    for r in store.get("runs", {}).values():  # steps from the logs where the runs are kept
+        if r.get("folder") and "values" in r:
+            steps = _steps({"results": str(Path(r["folder"]) / stage_section(r["test"])),
+                            "test_summary": {"steps": r.get("steps")}})
+            r["steps"] = steps
     shown = TESTS if args.replot or args.write else tests
     body = section(store, base, dict(LEVELS), shown, settings_text)
     print(body)
