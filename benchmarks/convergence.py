@@ -264,14 +264,35 @@ def run_variant(v: Variant, data: dict, base: dict, root: Path, crimps: dict,
     record["wall_s"] = time.perf_counter() - t0
     s = summary["test_summary"]
     curve = read_csv(Path(summary["results"]) / "curve.csv")
-    verdict = s.get("quasi_static")
     record.update(beads=summary["coupon_beads"], steps=_steps(summary),
-                  values=values_of(v.test, summary, curve),
-                  quasi_static=verdict.get("ok") if isinstance(verdict, dict) else None,
-                  problems=(verdict or {}).get("problems", [])
-                  if isinstance(verdict, dict) else [],
-                  folder=str(out))
+                  values=values_of(v.test, summary, curve), **verdict_of(s), folder=str(out))
     return record
+
+
+def verdict_of(test_summary: dict) -> dict:
+    """The quasi-static verdict of a test: ok, the problems, and the trusted ranges of
+    the curve where it is judged per interval."""
+    verdict = test_summary.get("quasi_static")
+    if not isinstance(verdict, dict):
+        return {"quasi_static": None, "problems": [], "trusted": None}
+    return {"quasi_static": verdict.get("ok"), "problems": verdict.get("problems", []),
+            "trusted": verdict.get("trusted")}
+
+
+def _verdict_text(r: dict, test: str) -> str:
+    qs = r.get("quasi_static")
+    if qs is None:
+        return "–"
+    if qs:
+        return "yes"
+    unit = {"tension": " %", "picture-frame": "°"}.get(test, "")
+    trusted = r.get("trusted")
+    if trusted:
+        ranges = ", ".join(f"{a:g}–{b:g}" for a, b in trusted)
+        return f"no; trusted {ranges}{unit}"
+    if trusted == []:
+        return "no; nowhere trusted"
+    return "no"
 
 
 def planned_size(v: Variant, data: dict, base: dict) -> tuple[int, int]:
@@ -411,7 +432,7 @@ def runs_table(test: str, runs: dict, base: dict, levels: dict) -> str:
                 rows.append([label, v.key, "–", "–", "–", "–",
                              f"not run ({reason})", *["" for _ in range(len(names) - 1)]])
                 continue
-            qs = {True: "yes", False: "no", None: "–"}[r.get("quasi_static")]
+            qs = _verdict_text(r, test)
             rows.append([label, v.key, r["beads"], r["steps"] if r["steps"] else "–",
                          f"{r['wall_s']:.0f}", qs,
                          *(_fmt(r["values"].get(q), q) for q in names)])
@@ -573,6 +594,19 @@ def parse_levels(items: list[str] | None) -> dict[str, tuple]:
     return out
 
 
+def parse_not_run(item: str, base: dict) -> tuple[Variant, str]:
+    """``"picture-frame/cells=6:estimated 100 min"`` -> (its run, the reason)."""
+    where, _, reason = item.partition(":")
+    test, _, level = where.partition("/")
+    kind, _, value = level.partition("=")
+    if test not in TESTS or kind not in LEVELS or not reason.strip():
+        raise SystemExit(f"--not-run expects TEST/KIND=VALUE:REASON, got {item!r}")
+    v = variant(test, (kind, float(value)), base)
+    if v is None:
+        raise SystemExit(f"--not-run: {test} has no {kind} levels")
+    return v, reason.strip()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true",
@@ -590,6 +624,10 @@ def main(argv: list[str] | None = None) -> int:
                              "(default: the example's)")
     parser.add_argument("--note", default=None,
                         help="a reading of the table, kept in the JSON and printed under it")
+    parser.add_argument("--not-run", action="append", default=[],
+                        metavar="TEST/KIND=VALUE:REASON",
+                        help="say why a level was not run (kept in the JSON), e.g. "
+                             "'picture-frame/cells=6:estimated 100 min'")
     parser.add_argument("--estimate", action="store_true",
                         help="no runs: beads, steps and time of each planned run")
     parser.add_argument("--replot", action="store_true", help="no runs: table from the JSON")
@@ -609,6 +647,10 @@ def main(argv: list[str] | None = None) -> int:
     tests = tuple(args.only) if args.only else TESTS
     if args.note is not None:
         store["note"] = args.note
+    for item in args.not_run:
+        v, reason = parse_not_run(item, base)
+        if "values" not in store.setdefault("runs", {}).get(v.key, {}):
+            store["runs"][v.key] = {"key": v.key, "not_run": reason}
     store.update(settings=args.set, base=base,
                  max_pressure=str(data.get("compaction", {}).get("max_pressure_pa", "")))
     finished = True
@@ -624,9 +666,14 @@ def main(argv: list[str] | None = None) -> int:
             steps = _steps({"results": str(Path(r["folder"]) / stage_section(r["test"])),
                             "test_summary": {"steps": r.get("steps")}})
             r["steps"] = steps
+            test_summary = Path(r["folder"]) / stage_section(r["test"]) / "summary.json"
+            if test_summary.exists():
+                r.update(verdict_of(json.loads(test_summary.read_text())))
     shown = TESTS if args.replot or args.write else tests
     body = section(store, base, dict(LEVELS), shown, settings_text)
     print(body)
+    if args.write or args.note is not None or args.not_run:
+        _save(store, data_path)
     if args.write:
         name = SECTION if not settings_text else f"{SECTION} ({settings_text})"
         update_section(name, body, COMMAND + (f" {' '.join('--set ' + s for s in args.set)}"

@@ -174,3 +174,10 @@ def test_convergence_table_judges_the_two_finest_levels():
     assert rows["cells 4 → 6"][1].startswith("not run (cells 4, cells 6 not run)")
     text = bench.runs_table("picture-frame", runs, base, bench.LEVELS)
     assert "not run (not requested in this pass)" in text
+    v, reason = bench.parse_not_run("picture-frame/cells=6:estimated 100 min", base)
+    assert v.cells == 6 and reason == "estimated 100 min"
+    runs[v.key] = {"key": v.key, "not_run": reason}
+    assert "not run (estimated 100 min)" in bench.runs_table("picture-frame", runs, base,
+                                                            bench.LEVELS)
+    assert bench._verdict_text({"quasi_static": False, "trusted": [[1.0, 3.0]]},
+                               "tension") == "no; trusted 1–3 %"
