@@ -412,21 +412,30 @@ def _change_text(c: dict, quantity: str) -> str:
     return f"{100 * c['change']:+.1f} % {mark}"
 
 
+def shown_levels(test: str, kind: str, base: dict, levels: dict) -> tuple:
+    """The levels of a refinement a table shows: ``levels[kind]``, and for ``cells`` the
+    test's own base coupon when it is not one of them (picture frame ``--frame-cells 2``)."""
+    values = tuple(levels[kind])
+    if kind == "cells" and test == "picture-frame" and base["frame_cells"] not in values:
+        values = tuple(sorted(values + (base["frame_cells"],)))
+    return values
+
+
 def runs_table(test: str, runs: dict, base: dict, levels: dict) -> str:
     """One row per level of ``test``: run, size, cost, values."""
     names = QUANTITIES[test]
     header = (["level", "run", "beads", "steps", "wall s", "quasi-static"]
               + [f"{title} [{unit}]" for title, unit in names.values()])
     rows = []
-    for kind, values in levels.items():
-        for value in values:
+    for kind in levels:
+        for value in shown_levels(test, kind, base, levels):
             v = variant(test, (kind, value), base)
             if v is None:
                 continue
             r = runs.get(v.key)
             label = f"{kind} {value:g}"
             if v == variant(test, ("sd", base["spacing_ratio"]), base):
-                label += " (example)"
+                label += " (base)"
             if r is None or "values" not in r:
                 reason = r["not_run"] if r else "not requested in this pass"
                 rows.append([label, v.key, "–", "–", "–", "–",
@@ -439,33 +448,50 @@ def runs_table(test: str, runs: dict, base: dict, levels: dict) -> str:
     return table(header, rows)
 
 
+def pair_row(test: str, kind: str, coarse, fine, runs: dict, base: dict,
+             criterion: bool) -> list | None:
+    """The change of every quantity from level ``coarse`` to ``fine`` (None: a level that
+    does not apply to the test)."""
+    vc, vf = variant(test, (kind, coarse), base), variant(test, (kind, fine), base)
+    if vc is None:
+        return None
+    label = f"{kind} {coarse:g} → {fine:g}" + ("" if criterion else " (coarser pair)")
+    rc, rf = runs.get(vc.key, {}), runs.get(vf.key, {})
+    missing = [f"{kind} {lv:g}" for lv, r in ((coarse, rc), (fine, rf)) if "values" not in r]
+    if missing:
+        return [label, f"not run ({', '.join(missing)} not run)",
+                *["" for _ in range(len(QUANTITIES[test]) - 1)], "–"]
+    cs = {q: change(test, q, rc["values"].get(q), rf["values"].get(q))
+          for q in QUANTITIES[test]}
+    judged = [c["ok"] for c in cs.values() if c["ok"] is not None]
+    verdict = "–" if not judged else ("pass" if all(judged) else "**fail**")
+    if not criterion:
+        verdict = f"({verdict})" if judged else "–"
+    return [label, *(_change_text(cs[q], q) for q in QUANTITIES[test]), verdict]
+
+
 def convergence_rows(test: str, runs: dict, base: dict) -> list[list]:
-    """The change between the two finest levels of each refinement, per quantity."""
-    rows = []
+    """The change between the two finest levels of each refinement (the criterion), then
+    between coarser neighbouring levels where both ran (for information)."""
+    rows, extra = [], []
     for kind in LEVELS:
-        coarse, fine = finest_pair(kind)
-        vc, vf = variant(test, (kind, coarse), base), variant(test, (kind, fine), base)
-        if vc is None:
+        row = pair_row(test, kind, *finest_pair(kind), runs, base, criterion=True)
+        if row is None:
             continue
-        label = f"{kind} {coarse:g} → {fine:g}"
-        rc, rf = runs.get(vc.key, {}), runs.get(vf.key, {})
-        missing = [f"{kind} {lv:g}" for lv, r in ((coarse, rc), (fine, rf))
-                   if "values" not in r]
-        if missing:
-            rows.append([label, f"not run ({', '.join(missing)} not run)",
-                         *["" for _ in range(len(QUANTITIES[test]) - 1)], "–"])
-            continue
-        cs = {q: change(test, q, rc["values"].get(q), rf["values"].get(q))
-              for q in QUANTITIES[test]}
-        judged = [c["ok"] for c in cs.values() if c["ok"] is not None]
-        verdict = "–" if not judged else ("pass" if all(judged) else "**fail**")
-        rows.append([label, *(_change_text(cs[q], q) for q in QUANTITIES[test]), verdict])
-    return rows
+        rows.append(row)
+        values = shown_levels(test, kind, base, LEVELS)
+        for coarse, fine in zip(values[:-1], values[1:], strict=True):
+            if (coarse, fine) == finest_pair(kind):
+                continue
+            row = pair_row(test, kind, coarse, fine, runs, base, criterion=False)
+            if "not run" not in row[1]:
+                extra.append(row)
+    return rows + extra
 
 
 def convergence_table(test: str, runs: dict, base: dict) -> str:
     header = (["refinement"] + [f"Δ {title}" for title, _ in QUANTITIES[test].values()]
-              + ["all ≤ criterion"])
+              + ["all ≤ criterion"])  # coarser pairs: the verdict in brackets, information
     return table(header, convergence_rows(test, runs, base))
 
 
