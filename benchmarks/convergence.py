@@ -501,8 +501,8 @@ TEST_NOTES = {
                   "branch; – where the curve starts above that pressure (the platen's first "
                   "contact already presses harder)",
     "tension": "coupon tiled from the crimped cell, {tension_len} cells long (the level) × "
-               "{tension_width} wide, to the example's 3 %; stiffness and forces per unit "
-               "width",
+               "{tension_width} wide, to the example's 3 %; forces per unit width [N/mm], "
+               "stiffness = force per unit width per unit strain [N/mm] (bilinear fit)",
     "picture-frame": "square coupon tiled from the crimped cell, clamped as cut, "
                      "{frame_cells} × {frame_cells} cells for the fibres and s/d levels; "
                      "the example's speed and angle range",
@@ -516,11 +516,15 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
     total = sum(r["wall_s"] + (r.get("crimp_wall_s") or 0) for r in done)
     contact = f"contact changed with `--set {settings_text}`" if settings_text else \
         "the example's contact (default stiffness, μ = 0.3)"
+    example_frame = base_levels(read_example())["frame_cells"]
+    frame_note = "" if base["frame_cells"] == example_frame else \
+        f" (the example's is {example_frame} × {example_frame}: smaller to afford the levels)"
     lines = [
         f"`examples/{EXAMPLE}` refined one parameter at a time from its defaults "
-        f"(N{base['n_fibres']} fibres per yarn, s/d {base['spacing_ratio']:g}, tension "
+        f"({base['n_fibres']} fibres per yarn, s/d {base['spacing_ratio']:g}, tension "
         f"coupon {base['tension_cells'][0]} × {base['tension_cells'][1]} cells, picture "
-        f"frame {base['frame_cells']} × {base['frame_cells']} cells; 1 cell = 5 mm), "
+        f"frame {base['frame_cells']} × {base['frame_cells']} cells{frame_note}; 1 cell = "
+        f"5 mm; \"(base)\" marks these in the tables), "
         f"{contact}. One process, in-process LAMMPS on one core, one run after the other "
         f"under `nice`, on the 2-core machine shared with three other developers' jobs: "
         f"wall times are noisy. Runs in the table: {len(done)}, "
