@@ -240,6 +240,10 @@ def _steps(summary: dict) -> int | None:
     return int(steps) if steps is not None else None
 
 
+def folder_name(v: Variant) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", v.key)
+
+
 def run_variant(v: Variant, data: dict, base: dict, root: Path, crimps: dict,
                 engine) -> dict:
     """Crimp (once per discretisation) and run one test; its record."""
@@ -259,7 +263,7 @@ def run_variant(v: Variant, data: dict, base: dict, root: Path, crimps: dict,
             crimps[v.crimp_tag] = {"wall_s": time.perf_counter() - t0}
     record["crimp_wall_s"] = crimps[v.crimp_tag]["wall_s"]
     t0 = time.perf_counter()
-    out = root / re.sub(r"[^A-Za-z0-9_.-]+", "_", v.key)
+    out = root / folder_name(v)
     summary = run_test(scene, v.test, out, engine=engine, crimped=crimp_dir, overwrite=True)
     record["wall_s"] = time.perf_counter() - t0
     s = summary["test_summary"]
@@ -326,13 +330,42 @@ def estimate(plan: list[tuple[str, Variant]], data: dict, base: dict, store: dic
             continue
         seen.add(v.key)
         done = [r for r in runs.values() if r.get("test") == v.test and "values" in r
-                and r.get("steps")]
+                and r.get("steps") and r.get("wall_s")]
         rate = (sum(r["wall_s"] for r in done) / sum(r["beads"] * r["steps"] for r in done)
                 if done else SECONDS_PER_BEAD_STEP)
         beads, steps = planned_size(v, data, base)
         state = "done" if "values" in runs.get(v.key, {}) else "to run"
         print(f"{v.key:36s} {beads:7d} beads {steps:10d} steps  ~{rate * beads * steps / 60:6.1f}"
               f" min at {rate:.2g} s/bead-step ({state})", flush=True)
+
+
+def salvage(v: Variant, data: dict, base: dict, out: Path) -> dict:
+    """The record of a picture frame stopped before its end, reduced from its partial
+    outputs with the protocol's own reduce (values past the angle it reached are None;
+    the locking method reads the curve only to a little past locking). Raises what the
+    reduce raises."""
+    from fabmd.protocols.coupon import load_coupon
+    from fabmd.stages import protocol_stage
+
+    if v.test != "picture-frame":
+        raise ValueError("only picture frames are salvaged (their curve is read by angle)")
+    scene = build_scene(v, data, base)
+    protocol = protocol_stage(scene, v.test)
+    test_dir = out / stage_section(v.test)
+    model = protocol.prepare(load_coupon(out / "coupon"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = protocol.reduce(test_dir, model, protocol.make_monitor())
+    summary = {"test_summary": result.summary, "results": str(test_dir)}
+    reached = float(np.max(result.curve["shear_angle_deg"]))
+    return {"key": v.key, "test": v.test, "n_fibres": v.n_fibres,
+            "spacing_ratio": v.spacing_ratio, "cells": v.cells, "wall_s": None,
+            "beads": model.n_beads, "steps": _steps(summary),
+            "values": values_of(v.test, summary, result.curve),
+            "quasi_static": None, "problems": [], "trusted": None, "folder": str(out),
+            "partial": f"stopped by the time limit at {reached:.1f}° of "
+                       f"{protocol.max_shear_angle_deg:g}°; reduced from the partial "
+                       f"outputs, no quasi-static verdict"}
 
 
 def run_study(plan: list[tuple[str, Variant]], data: dict, base: dict, store: dict,
@@ -442,8 +475,10 @@ def runs_table(test: str, runs: dict, base: dict, levels: dict) -> str:
                              f"not run ({reason})", *["" for _ in range(len(names) - 1)]])
                 continue
             qs = _verdict_text(r, test)
+            if r.get("partial"):
+                qs = f"partial: {r['partial']}"
             rows.append([label, v.key, r["beads"], r["steps"] if r["steps"] else "–",
-                         f"{r['wall_s']:.0f}", qs,
+                         "–" if r.get("wall_s") is None else f"{r['wall_s']:.0f}", qs,
                          *(_fmt(r["values"].get(q), q) for q in names)])
     return table(header, rows)
 
@@ -513,7 +548,7 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
     """The RESULTS.md section (or its print-out)."""
     runs = store.get("runs", {})
     done = [r for r in runs.values() if "values" in r]
-    total = sum(r["wall_s"] + (r.get("crimp_wall_s") or 0) for r in done)
+    total = sum((r.get("wall_s") or 0) + (r.get("crimp_wall_s") or 0) for r in done)
     contact = f"contact changed with `--set {settings_text}`" if settings_text else \
         "the example's contact (default stiffness, μ = 0.3)"
     example_frame = base_levels(read_example())["frame_cells"]
@@ -658,6 +693,9 @@ def main(argv: list[str] | None = None) -> int:
                         metavar="TEST/KIND=VALUE:REASON",
                         help="say why a level was not run (kept in the JSON), e.g. "
                              "'picture-frame/cells=6:estimated 100 min'")
+    parser.add_argument("--salvage", action="store_true",
+                        help="reduce picture frames stopped by the time limit from their "
+                             "partial outputs (marked partial in the table)")
     parser.add_argument("--estimate", action="store_true",
                         help="no runs: beads, steps and time of each planned run")
     parser.add_argument("--replot", action="store_true", help="no runs: table from the JSON")
@@ -684,6 +722,22 @@ def main(argv: list[str] | None = None) -> int:
     store.update(settings=args.set, base=base,
                  max_pressure=str(data.get("compaction", {}).get("max_pressure_pa", "")))
     finished = True
+    if args.salvage:
+        if args.root is None:
+            raise SystemExit("--salvage needs --root (where the runs are)")
+        root = args.root
+        for key, r in store.get("runs", {}).items():
+            if "values" in r or not r.get("not_run", "").startswith("stopped"):
+                continue
+            v = next((v for _, v in planned(TESTS, LEVELS, base) if v.key == key), None)
+            if v is None or v.test != "picture-frame":
+                continue
+            try:
+                store["runs"][key] = salvage(v, data, base, root / folder_name(v))
+                print(f"salvaged {key}: {store['runs'][key]['partial']}")
+            except Exception as exc:  # noqa: BLE001 - reported, the record stays "not run"
+                print(f"could not salvage {key}: {type(exc).__name__}: {exc}")
+        _save(store, data_path)
     if args.estimate:
         estimate(planned(tests, levels, base), data, base, store)
         return 0
