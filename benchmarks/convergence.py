@@ -625,7 +625,7 @@ def findings(store: dict, base: dict, tests) -> list[str]:
 
 def data_path_for(settings_text: str) -> Path:
     """The JSON of a study: one per ``--set`` (the default contact's has no tag)."""
-    tag = re.sub(r"[^A-Za-z0-9_.=-]+", "_", settings_text).strip("_")
+    tag = re.sub(r"[^A-Za-z0-9_.-]+", "_", settings_text).strip("_")
     return HERE / (f"convergence-{tag}.json" if tag else "convergence.json")
 
 
