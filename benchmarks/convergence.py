@@ -760,8 +760,10 @@ def main(argv: list[str] | None = None) -> int:
         _save(store, data_path)
     if args.write:
         name = SECTION if not settings_text else f"{SECTION} ({settings_text})"
-        update_section(name, body, COMMAND + (f" {' '.join('--set ' + s for s in args.set)}"
-                                              if args.set else ""))
+        command = COMMAND + "".join(f" --set {s}" for s in args.set)
+        if base["frame_cells"] != base_levels(read_example())["frame_cells"]:
+            command += f" --frame-cells {base['frame_cells']}"
+        update_section(name, body, command)
     return 0 if finished else 5
 
 
