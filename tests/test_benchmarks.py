@@ -89,3 +89,95 @@ def test_accuracy_errors_and_pareto_front():
     assert e["combined"] == 1.0
     points = [("a", 1.0, 0.5), ("b", 2.0, 0.6), ("c", 3.0, 0.1), ("d", 0.5, 0.9)]
     assert bench.pareto_front(points) == ["d", "a", "c"]
+
+
+def load_convergence():
+    import sys
+
+    spec = importlib.util.spec_from_file_location("convergence",
+                                                  ROOT / "benchmarks" / "convergence.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["convergence"] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_convergence_levels_build_the_refined_scenes():
+    """Each level changes its own parameter only, through the scene-file parser."""
+    bench = load_convergence()
+    data = bench.read_example()
+    base = bench.base_levels(data)
+    assert base == {"n_fibres": 7, "spacing_ratio": 0.5, "tension_cells": [4, 2],
+                    "frame_cells": 3}
+    example = bench.build_scene(bench.variant("tension", ("fibres", 7), base), data, base)
+    fibres = bench.build_scene(bench.variant("tension", ("fibres", 19), base), data, base)
+    for fam in ("warp", "weft"):
+        a, b = getattr(example.fabric, fam), getattr(fibres.fabric, fam)
+        assert b.n_fibres == 19 and a.n_fibres == 7
+        # the yarn is the same yarn: tex, section and spacing unchanged
+        assert b.linear_density_kg_m == a.linear_density_kg_m
+        assert (b.width_m, b.height_m, b.spacing_m) == (a.width_m, a.height_m, a.spacing_m)
+    assert fibres.model(check=False).n_fibres == 19 * example.model(check=False).n_fibres / 7
+    # s/d 0.25 halves the bead spacing of the same fibres
+    fine = bench.build_scene(bench.variant("compaction", ("sd", 0.25), base), data, base)
+    assert fine.discretisation.spacing_ratio == 0.25
+    m0, m1 = example.model(check=False), fine.model(check=False)
+    assert m1.n_beads == pytest.approx(2 * m0.n_beads, rel=0.05)
+    assert m1.diameters.max() == pytest.approx(m0.diameters.max())
+    # cells: the tension coupon 6 cells long (width kept), the picture frame 6 x 6
+    from fabmd.stages import coupon_stage
+
+    cell = example.fabric.unit_cell_m
+    t6 = bench.build_scene(bench.variant("tension", ("cells", 6), base), data, base)
+    coupon, _ = coupon_stage(t6, "tension")
+    assert (coupon.length_m, coupon.width_m) == pytest.approx((6 * cell[0], 2 * cell[1]))
+    f6 = bench.build_scene(bench.variant("picture-frame", ("cells", 6), base), data, base)
+    coupon, _ = coupon_stage(f6, "picture-frame")
+    assert (coupon.length_m, coupon.width_m) == pytest.approx((6 * cell[0], 6 * cell[1]))
+    # compaction runs on the periodic cell: no coupon level
+    assert bench.variant("compaction", ("cells", 6), base) is None
+    assert data == bench.read_example()  # the example's dict untouched
+
+
+def test_convergence_set_reaches_the_contact_and_levels_parse():
+    bench = load_convergence()
+    from fabmd.cli.validate import parse_settings
+
+    data = bench.merge(bench.read_example(), parse_settings(["contact.friction=0.1"]))
+    base = bench.base_levels(data)
+    scene = bench.build_scene(bench.variant("tension", ("sd", 0.5), base), data, base)
+    assert scene.contact.friction == 0.1
+    assert bench.parse_levels(["fibres=19,1", "sd"]) == {"fibres": (1, 19), "sd": (0.5, 0.25)}
+    assert bench.parse_levels(None) == bench.LEVELS
+    with pytest.raises(SystemExit):
+        bench.parse_levels(["fibres=3"])
+
+
+def test_convergence_table_judges_the_two_finest_levels():
+    bench = load_convergence()
+    base = {"n_fibres": 7, "spacing_ratio": 0.5, "tension_cells": [4, 2], "frame_cells": 3}
+
+    def run(level, values):
+        v = bench.variant("picture-frame", level, base)
+        return v.key, {"key": v.key, "values": values, "beads": 10, "steps": 5,
+                       "wall_s": 1.0, "quasi_static": True}
+
+    full = {"F10°": 1.0, "F20°": 2.0, "F30°": 3.0, "F40°": 4.0, "locking": 40.0}
+    runs = dict([run(("fibres", 7), full),
+                 run(("fibres", 19), {**full, "F40°": 4.4, "locking": 41.0}),
+                 run(("sd", 0.25), {**full, "locking": 43.0})])
+    rows = {r[0]: r for r in bench.convergence_rows("picture-frame", runs, base)}
+    fibres = rows["fibres 7 → 19"]
+    assert fibres[4].startswith("+9.1 %") and "fail" in fibres[4]  # (4.4 - 4) / 4.4
+    assert fibres[5] == "+1.0° pass" and "fail" in fibres[-1]
+    assert rows["sd 0.5 → 0.25"][5] == "+3.0° **fail**"
+    assert rows["cells 4 → 6"][1].startswith("not run (cells 4, cells 6 not run)")
+    text = bench.runs_table("picture-frame", runs, base, bench.LEVELS)
+    assert "not run (not requested in this pass)" in text
+    v, reason = bench.parse_not_run("picture-frame/cells=6:estimated 100 min", base)
+    assert v.cells == 6 and reason == "estimated 100 min"
+    runs[v.key] = {"key": v.key, "not_run": reason}
+    assert "not run (estimated 100 min)" in bench.runs_table("picture-frame", runs, base,
+                                                            bench.LEVELS)
+    assert bench._verdict_text({"quasi_static": False, "trusted": [[1.0, 3.0]]},
+                               "tension") == "no; trusted 1–3 %"
