@@ -19,8 +19,10 @@ Packing limit. The van Wyk form stays finite at the densest packing of circular 
 (Vf = π/(2√3), :data:`~fabmd.model.compaction.PACKING_LIMIT`); a bundle cannot pack denser.
 So past the spacing where the bundle reaches it — or, if that comes first, where the law's
 tangent reaches the crossing contact's stiffness k'_cross — the force goes on linearly with
-slope k'_cross: a hard core as stiff as a crossing, so the stable time step stays what the
-crossing contact sets (:mod:`fabmd.model.timestep`).
+slope k'_cross: a hard core as stiff as a crossing. The stable time step
+(:mod:`fabmd.model.timestep`) takes the bead pair's steepest tangent: the crossing's k_n in
+the core, up to 1.5× it just inside the core at s/d 0.5, where the table takes the second
+neighbours' share off (:meth:`BundleContact.pair_force_n`); the step is that much shorter.
 
 LAMMPS realisation (``pair_style hybrid/overlay granular table linear N``): ``granular``
 keeps its per-type-pair Hooke coefficients (crossings stiff; same family a linear part
@@ -36,6 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -192,6 +195,13 @@ class BundleContact:
             force[i] = target[i] - 2.0 * np.interp(rho[i], r, force) * r[i] / rho[i]
         return force
 
+    def max_pair_stiffness_n_per_m(self, bond_length_m: float,
+                                   crossing_stiffness_pa: float) -> float:
+        """Largest tangent stiffness of one bead pair [N/m] (:meth:`pair_force_n`), for the
+        stable time step: k'_cross·l0 in the core, up to 1.6× that just inside it where the
+        second neighbours' share is taken off (glass law, s/d 0.5)."""
+        return _max_pair_stiffness(self, bond_length_m, crossing_stiffness_pa)
+
     def table_text(self, bond_length_m: float, crossing_stiffness_pa: float,
                    keyword: str = "WITHIN_FAMILY", points: int = TABLE_POINTS) -> str:
         """LAMMPS ``pair_style table`` section of the excess force per bead pair over the
@@ -212,3 +222,11 @@ class BundleContact:
         lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
                   for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
         return "\n".join(lines) + "\n"
+
+
+@lru_cache(maxsize=32)
+def _max_pair_stiffness(bundle: BundleContact, bond_length_m: float,
+                        crossing_stiffness_pa: float) -> float:
+    r = np.linspace(TABLE_INNER * bundle.diameter_m, bundle.diameter_m, TABLE_POINTS)
+    force = bundle.pair_force_n(r, bond_length_m, crossing_stiffness_pa)
+    return float(np.max(-np.diff(force) / np.diff(r)))

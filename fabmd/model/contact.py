@@ -258,6 +258,9 @@ class ContactModel:
         kn = self.normal_stiffness_n_per_m(beads)
         if self.split:
             kn = max(kn, self.within_family_stiffness_n_per_m(beads))
+        if self.within_family_law is not None:  # its table's steepest part
+            kn = max(kn, self.within_family_law.max_pair_stiffness_n_per_m(
+                max(b.bond_length_m for b in beads), self.crossing_stiffness_pa(beads)))
         if self.normal == "hertz":
             kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
                                   / self.reference_overlap)
