@@ -295,6 +295,6 @@ def test_the_example_cell_crimps_with_the_law_and_its_folder_holds_the_table(tmp
     assert s["quasi_static"] and s["pass_through"]["flipped_pairs"] == 0
     assert s["overlap"]["max_overlap_ratio"] < 0.39  # below the hard core (0.378 d) + ripple
     # the tension at this level is not resolved: the same state (1.34 mm, 4.5 % crimp)
-    # stopped quasi-static with +0.55 and −1.04 cN/tex at time steps 1.22× apart
+    # stopped quasi-static with +0.55 and −1.04 cN/tex at time steps 3 % apart
     assert abs(s["yarn_tension"]["warp"]["cn_per_tex"]) < 2.0
     assert 1.2e-3 < s["crimped"]["thickness_m"] < 1.45e-3  # measured 1.336 mm
