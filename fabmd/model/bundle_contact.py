@@ -22,7 +22,8 @@ tangent reaches the crossing contact's stiffness k'_cross — the force goes on 
 slope k'_cross: a hard core as stiff as a crossing. The stable time step
 (:mod:`fabmd.model.timestep`) takes the bead pair's steepest tangent: the crossing's k_n in
 the core, up to 1.5× it just inside the core at s/d 0.5, where the table takes the second
-neighbours' share off (:meth:`BundleContact.pair_force_n`); the step is that much shorter.
+neighbours' share off (:meth:`BundleContact.pair_force_n`): 3 % shorter on the plain-weave
+example, where the bonds bound the step too.
 
 LAMMPS realisation (``pair_style hybrid/overlay granular table linear N``): ``granular``
 keeps its per-type-pair Hooke coefficients (crossings stiff; same family a linear part
