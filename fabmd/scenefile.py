@@ -258,6 +258,9 @@ def _fields(cls) -> tuple[str, ...]:
 #: keys of ``[contact] compaction = {...}``
 COMPACTION_KEYS = ("law", "coefficient", "modulus_pa", "vf0", "exponent",
                    "reference_pressure_pa", "family")
+#: ``[contact] within_family = { form = ... }``: "secant" (linear, matched at the reference
+#: pressure) or "law" (the compaction law itself, ContactModel "Within-family law")
+WITHIN_FAMILY_FORMS = ("secant", "law")
 
 
 def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
@@ -266,8 +269,7 @@ def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
     line-contact stiffness with which a hexagonal bundle of the family's virtual fibres
     reaches the law's fibre volume fraction at ``reference_pressure_pa`` (default 100 kPa;
     :func:`fabmd.model.compaction.contact_for_yarn`)."""
-    from .model.compaction import CARBON_BUNDLE, GLASS_BUNDLE, CompactionLaw, contact_for_yarn
-    from .model.fabric_model import family_beads
+    from .model.compaction import contact_for_yarn
 
     if not isinstance(table, dict):
         raise InputError(f"{where}: [{section}] must be a table, got {table!r}")
@@ -275,6 +277,21 @@ def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
     if section == "contact.compaction" and "normal_stiffness_pa" in contact_table:
         raise InputError(f"{where}: [contact] give normal_stiffness_pa or compaction, not "
                          f"both (the law sets the stiffness)")
+    law, fibre, p_ref = _law_and_fibre(where, table, fabric, disc, section)
+    try:
+        return contact_for_yarn(law, fibre.area_m2, fibre.diameter_m,
+                                p_ref)["normal_stiffness_pa"]
+    except InputError as exc:
+        raise InputError(f"{where}: [{section}] {exc}") from None
+
+
+def _law_and_fibre(where: str, table: dict, fabric: Fabric, disc: Discretisation,
+                   section: str):
+    """The compaction law of a ``{law = ..., ...}`` table, the virtual fibre of its
+    ``family`` (default warp) and its ``reference_pressure_pa`` (default 100 kPa)."""
+    from .model.compaction import CARBON_BUNDLE, GLASS_BUNDLE, CompactionLaw
+    from .model.fabric_model import family_beads
+
     kwargs = dict(table)
     law_name = kwargs.pop("law", "custom")
     family = kwargs.pop("family", "warp")
@@ -294,10 +311,23 @@ def _stiffness_from_law(where: str, table, fabric: Fabric, disc: Discretisation,
     if family not in fams:
         raise InputError(f"{where}: [{section}] family must be one of {', '.join(fams)}, "
                          f"got {family!r}")
-    fibre = fams[family].fibre
+    return law, fams[family].fibre, p_ref
+
+
+def _within_family_law(where: str, table, fabric: Fabric, disc: Discretisation):
+    """The :class:`~fabmd.model.bundle_contact.BundleContact` of ``[contact] within_family =
+    { law = ..., form = "law" }`` (same-family pairs follow the law itself)."""
+    from .model.bundle_contact import BundleContact
+
+    section = "contact.within_family"
+    if "reference_pressure_pa" in table:
+        raise InputError(f"{where}: [{section}] reference_pressure_pa applies to form = "
+                         f"\"secant\" only (form = \"law\" follows the law at every "
+                         f"pressure), got {table['reference_pressure_pa']!r}")
+    _check_keys(table, COMPACTION_KEYS, where, section)
+    law, fibre, _ = _law_and_fibre(where, table, fabric, disc, section)
     try:
-        return contact_for_yarn(law, fibre.area_m2, fibre.diameter_m,
-                                p_ref)["normal_stiffness_pa"]
+        return BundleContact(law, fibre.area_m2, fibre.diameter_m)
     except InputError as exc:
         raise InputError(f"{where}: [{section}] {exc}") from None
 
@@ -433,6 +463,18 @@ def _contact(table: dict, fabric: Fabric, disc: Discretisation, where: str) -> C
         if "within_family_stiffness_pa" in contact_table:
             raise InputError(f"{where}: [contact] give within_family_stiffness_pa or "
                              "within_family, not both (the law sets the stiffness)")
-        contact_table["within_family_stiffness_pa"] = _stiffness_from_law(
-            where, within_table, fabric, disc, contact_table, "contact.within_family")
+        if not isinstance(within_table, dict):
+            raise InputError(f"{where}: [contact.within_family] must be a table, got "
+                             f"{within_table!r}")
+        within_table = dict(within_table)
+        form = within_table.pop("form", "secant")
+        if form not in WITHIN_FAMILY_FORMS:
+            raise InputError(f"{where}: [contact.within_family] form must be one of "
+                             f"{', '.join(WITHIN_FAMILY_FORMS)}, got {form!r}")
+        if form == "law":
+            contact_table["within_family_law"] = _within_family_law(where, within_table,
+                                                                    fabric, disc)
+        else:
+            contact_table["within_family_stiffness_pa"] = _stiffness_from_law(
+                where, within_table, fabric, disc, contact_table, "contact.within_family")
     return schema.build(ContactModel, contact_table, "contact", where=where)

@@ -91,6 +91,7 @@ UNITS: dict[str, dict[str, str | Unit]] = {
     "ContactModel": _CONTACT,
     "ToolContact": _CONTACT,
     "CompactionLaw": {"modulus_pa": "pressure"},
+    "BundleContact": {"area_m2": "area", "diameter_m": "length"},
     # stage tables and their sub-tables
     "TimeStep": {"value_s": "time"},
     "Damping": {"viscous_time_s": "time"},

@@ -51,6 +51,15 @@ Measured (``benchmarks/RESULTS.md``, "Split contact"): with the glass law's k' (
 its thickness — crimping the plain-weave example towards 1 cN/tex pushes fibres of one
 yarn through each other (overlap > 0.5 d at −6 %); a linear contact has no packing limit.
 
+Within-family law (``within_family_law``, a :class:`fabmd.model.bundle_contact.BundleContact`):
+same-family pairs follow the compaction law itself up to its packing limit, then a hard
+core as stiff as a crossing — ``pair_style hybrid/overlay granular table``: ``granular``
+carries the law's largest linear part (friction and damping act there; friction within a
+family is μ × that part only, a known limit), a ``table`` on same-family type pairs the
+excess (a file in the run folder, :meth:`ContactModel.table_files`). The energy balance
+is not measured with it (``compute pair/local`` under ``hybrid/overlay`` loses the
+tangential force of overlaid pairs: :mod:`fabmd.scene.energy`).
+
 Older settings still work and are flagged as discretisation-dependent:
 ``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
 and ``stiffness_n_per_m`` (a fixed k_n per bead pair, ∝ 1/l0 per length).
@@ -81,8 +90,12 @@ from .. import inputs
 from ..errors import InputError
 from ..units import quantity
 from .beads import BeadParameters
+from .bundle_contact import TABLE_POINTS, BundleContact
 
 NORMAL_MODELS = ("hooke", "hertz")
+#: the within-family law's table file in the run folder, and its section keyword
+WITHIN_FAMILY_TABLE = "within_family.table"
+WITHIN_FAMILY_KEYWORD = "WITHIN_FAMILY"
 #: default k' = DEFAULT_TRANSVERSE_FACTOR · E·A/d² (module docstring): the former default
 #: k_n = 0.1·E·A/l0 at s/d = 0.5, now per unit length
 DEFAULT_TRANSVERSE_FACTOR = 0.4
@@ -164,6 +177,10 @@ class ContactModel:
             atom type), > 0 (accepts "230 kPa"); None (default): one contact for all
             pairs. When given, ``normal_stiffness_pa`` (or its default) applies to pairs
             of different families only (module docstring, "Split contact"). Hooke only.
+        within_family_law: a :class:`~fabmd.model.bundle_contact.BundleContact`: fibres of
+            the same family follow the compaction law itself (nonlinear, hard core past the
+            packing limit; module docstring, "Within-family law"); None (default): not.
+            Excludes ``within_family_stiffness_pa`` (the law sets the linear part).
     """
 
     friction: float = 0.3
@@ -177,9 +194,23 @@ class ContactModel:
     overlap_warning: float = 0.1
     overlap_limit: float = 0.5
     within_family_stiffness_pa: float | None = None
+    within_family_law: BundleContact | None = None
 
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
+        if self.within_family_law is not None:
+            if not isinstance(self.within_family_law, BundleContact):
+                raise InputError("contact.within_family_law must be a BundleContact, got "
+                                 f"{self.within_family_law!r}")
+            if self.within_family_stiffness_pa is not None:
+                raise InputError("contact.within_family_law: give it or "
+                                 "within_family_stiffness_pa, not both (the law sets the "
+                                 f"linear part), got {self.within_family_stiffness_pa!r}")
+            if self.normal != "hooke" or not self.per_length:
+                raise InputError(
+                    "contact.within_family_law: needs normal = 'hooke' and the stiffness per "
+                    "unit length (no stiffness_factor / stiffness_n_per_m), got normal = "
+                    f"{self.normal!r}")
         if self.within_family_stiffness_pa is not None:
             object.__setattr__(self, "within_family_stiffness_pa", inputs.positive(
                 "contact.within_family_stiffness_pa",
@@ -227,6 +258,9 @@ class ContactModel:
         kn = self.normal_stiffness_n_per_m(beads)
         if self.split:
             kn = max(kn, self.within_family_stiffness_n_per_m(beads))
+        if self.within_family_law is not None:  # its table's steepest part
+            kn = max(kn, self.within_family_law.max_pair_stiffness_n_per_m(
+                max(b.bond_length_m for b in beads), self.crossing_stiffness_pa(beads)))
         if self.normal == "hertz":
             kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
                                   / self.reference_overlap)
@@ -248,15 +282,32 @@ class ContactModel:
     @property
     def split(self) -> bool:
         """True when same-family pairs have their own stiffness (module docstring)."""
-        return self.within_family_stiffness_pa is not None
+        return self.within_family_stiffness_pa is not None or self.within_family_law is not None
 
     def within_family_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """k_n per bead pair [N/m] between fibres of one family: k'_within · l0 (widest
-        spacing); the crossing stiffness when the contact is not split."""
+        spacing; with a within-family law its linear part); the crossing stiffness when
+        the contact is not split."""
         if not self.split:
             return self.normal_stiffness_n_per_m(beads)
-        return _normal_stiffness("contact", self.within_family_stiffness_pa, None, None,
-                                 beads)
+        k_line = (self.within_family_stiffness_pa if self.within_family_law is None
+                  else self.within_family_law.linear_stiffness_pa())
+        return _normal_stiffness("contact", k_line, None, None, beads)
+
+    def crossing_stiffness_pa(self, beads: list[BeadParameters]) -> float:
+        """k' of a crossing [Pa] (per unit length; needs the per-length form)."""
+        return (self.normal_stiffness_pa if self.normal_stiffness_pa is not None
+                else default_stiffness_pa(beads))
+
+    def table_files(self, beads: list[BeadParameters]) -> dict[str, str]:
+        """Files the LAMMPS input reads, by name: the within-family law's table
+        (:data:`WITHIN_FAMILY_TABLE`), else none. The excess per bead pair uses the same
+        bead spacing l0 as the linear part (the widest)."""
+        if self.within_family_law is None:
+            return {}
+        l0 = max(b.bond_length_m for b in beads)
+        return {WITHIN_FAMILY_TABLE: self.within_family_law.table_text(
+            l0, self.crossing_stiffness_pa(beads), WITHIN_FAMILY_KEYWORD, TABLE_POINTS)}
 
     def softest_normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """The smallest k_n of any type pair [N/m] (largest overlap per unit force)."""
@@ -275,6 +326,8 @@ class ContactModel:
 
     def pair_style(self) -> str:
         """The cheapest LAMMPS granular style that carries this physics (measured)."""
+        if self.within_family_law is not None:
+            return "hybrid/overlay"  # granular + a table on same-family pairs
         if self.split:
             return "granular"  # per-type-pair coefficients
         if self.normal == "hooke" and self.friction == 0.0:

@@ -49,13 +49,18 @@ def input_name(protocol: str) -> str:
 
 
 def write_run_folder(out: Path | None, protocol: str, model: BeadModel, input_text: str,
-                     scene: dict, overwrite: bool = False) -> Path:
-    """Create the run folder and write data file, metadata, input, scene and ``run.sh``."""
+                     scene: dict, overwrite: bool = False,
+                     files: dict[str, str] | None = None) -> Path:
+    """Create the run folder and write data file, metadata, input, scene and ``run.sh``
+    (``files``: more files the input reads, name -> text, e.g.
+    :func:`fabmd.scene.blocks.contact_files`)."""
     run_dir = prepare_run_folder(out, overwrite=overwrite, prefix=protocol)
     if mpi.is_root():
         model.save(run_dir, stem=Path(DATA_FILE).stem)
         name = input_name(protocol)
         (run_dir / name).write_text(input_text)
+        for file_name, text in (files or {}).items():
+            (run_dir / file_name).write_text(text)
         write_json(run_dir / "scene.json", scene)
         (run_dir / "run.sh").write_text(run_sh_text(name))
         write_slurm_script(run_dir, name, model.n_beads)
@@ -125,12 +130,13 @@ def run_folder(engine: Engine, run_dir: Path, protocol: str, resume: bool = Fals
 
 def open_run_folder(out: Path | None, protocol: str, model: BeadModel, input_text: str,
                     scene: dict, overwrite: bool = False, resume: bool = False,
-                    plan: RunPlan | None = None) -> Path:
+                    plan: RunPlan | None = None, files: dict[str, str] | None = None) -> Path:
     """The run folder: ``out`` to resume from its checkpoint (``resume``), else a new one
-    (:func:`write_run_folder`) with the run's ``plan`` in ``plan.json``."""
+    (:func:`write_run_folder`, with ``files``) with the run's ``plan`` in ``plan.json``."""
     if resume:
         return resume_folder(out)
-    run_dir = write_run_folder(out, protocol, model, input_text, scene, overwrite=overwrite)
+    run_dir = write_run_folder(out, protocol, model, input_text, scene, overwrite=overwrite,
+                               files=files)
     if plan is not None and mpi.is_root():
         plan.write(run_dir)
     return run_dir

@@ -222,7 +222,8 @@ class Compaction:
         text = self.input_text(model)  # validates before anything is written
         run_dir = open_run_folder(out, self.protocol, model, text,
                                   {self.protocol: scene_dict(self)}, overwrite, resume,
-                                  plan=self.plan(model))
+                                  plan=self.plan(model), files=blocks.contact_files(
+                                      self.contact, model_bead_parameters(model)))
         run = run_folder(engine or Engine(), run_dir, self.protocol, resume=resume)
         result = None
         if mpi.is_root():

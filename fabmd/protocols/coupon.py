@@ -173,7 +173,8 @@ class Coupon:
             return CouponResult(Path(run_dir), geometry, {"relaxed": False})
         text = self.input_text(geometry)
         run_dir = open_run_folder(out, PROTOCOL, geometry, text, {"coupon": scene_dict(self)},
-                                  overwrite, resume)
+                                  overwrite, resume, files=blocks.contact_files(
+                                      self.contact, model_bead_parameters(geometry)))
         _, trajectory = run_with_trajectory(engine or Engine(), run_dir, PROTOCOL,
                                             self.trajectory, geometry, resume)
         summary = None

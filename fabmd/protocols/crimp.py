@@ -242,7 +242,9 @@ class Crimp:
         text = self.input_text(model)  # validates before anything is written
         run_dir = open_run_folder(out, PROTOCOL, model, text,
                                   {"crimp": scene_dict(self), "model": model.metadata()},
-                                  overwrite, resume, plan=self.plan(model))
+                                  overwrite, resume, plan=self.plan(model),
+                                  files=blocks.contact_files(self.contact,
+                                                             model_bead_parameters(model)))
         run, trajectory = run_with_trajectory(engine, run_dir, PROTOCOL, self.trajectory, model,
                                               resume)
         summary = None

@@ -330,7 +330,8 @@ class DrivenTest:
         text = self.input_text(start)  # validates before anything is written
         run_dir = open_run_folder(out, self.protocol, start, text,
                                   {self.protocol: scene_dict(self)}, overwrite, resume,
-                                  plan=self.plan(start))
+                                  plan=self.plan(start), files=blocks.contact_files(
+                                      self.contact, model_bead_parameters(start)))
         monitor = monitor or self.make_monitor()
         run, trajectory = run_with_trajectory(engine, run_dir, self.protocol, self.trajectory,
                                               start, resume, monitor=monitor,

@@ -6,9 +6,16 @@ import math
 
 import numpy as np
 
+from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
-from ..model.contact import ContactModel, ToolContact
+from ..model.bundle_contact import TABLE_POINTS
+from ..model.contact import (
+    WITHIN_FAMILY_KEYWORD,
+    WITHIN_FAMILY_TABLE,
+    ContactModel,
+    ToolContact,
+)
 from .templates import fmt, render, render_inline
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
@@ -176,17 +183,45 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
     if contact_model is None:
         return render("contact_none")
     if contact_model.split:  # per type pair: pair_style granular (ContactModel docstring)
+        law = contact_model.within_family_law
         lines = [render_inline("pair_coeff_granular_split", i=i, j=j, kn=fmt(c["kn"]),
                                gamman=fmt(c["gamman"]), kt=fmt(c["kt"]),
                                xgammat=fmt(c["gammat"] / c["gamman"]),
-                               friction=fmt(c["friction"]))
+                               friction=fmt(c["friction"]),
+                               sub_style="" if law is None else "granular ")
                  for i, j, c in contact_model.type_pair_coefficients(
                      beads, len(model.family_names))]
-        return render("contact_granular_split", friction=contact_model.friction,
-                      pair_coeffs="\n".join(lines))
+        if law is None:
+            return render("contact_granular_split", friction=contact_model.friction,
+                          pair_coeffs="\n".join(lines))
+        return _contact_law(model, contact_model, lines)
     c = contact_model.pair_coefficients(beads)
     return render("contact_granular", normal=contact_model.normal,
                   style=contact_model.pair_style(), **c)
+
+
+def _contact_law(model: BeadModel, contact_model: ContactModel, pair_coeffs: list[str]) -> str:
+    """``hybrid/overlay granular table``: the within-family law (ContactModel docstring);
+    the table file comes from :meth:`ContactModel.table_files` (:func:`contact_files`)."""
+    law = contact_model.within_family_law
+    d = float(model.diameters.max())
+    if np.ptp(model.diameters) > 1e-9 * d or abs(d - law.diameter_m) > 1e-9 * d:
+        raise InputError(
+            f"contact.within_family_law: needs one bead diameter, the law's "
+            f"{law.diameter_m:.6g} m, got {float(model.diameters.min()):.6g}–{d:.6g} m")
+    tables = [render_inline("pair_coeff_table_law", i=i, table_file=WITHIN_FAMILY_TABLE,
+                            keyword=WITHIN_FAMILY_KEYWORD, cutoff=fmt(law.diameter_m))
+              for i in range(1, len(model.family_names) + 1)]
+    return render("contact_granular_law", law=law.law.name, friction=contact_model.friction,
+                  table_file=WITHIN_FAMILY_TABLE, points=TABLE_POINTS,
+                  pair_coeffs="\n".join(pair_coeffs), table_coeffs="\n".join(tables))
+
+
+def contact_files(contact_model: ContactModel | None, beads: list[BeadParameters]
+                  ) -> dict[str, str]:
+    """Files :func:`contact` reads, by name, for the run folder (the within-family law's
+    table; none for the other contacts): pass them to ``write_run_folder(files=...)``."""
+    return {} if contact_model is None else contact_model.table_files(beads)
 
 
 def relax(model: BeadModel, time_step_s: float, held: str, free: str, quasi_static,
