@@ -20,7 +20,7 @@ from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
-from ..scene.adaptive import AdaptiveLoading, adaptive_plan, speed_commands
+from ..scene.adaptive import AdaptiveLoading, adaptive_plan, adaptive_summary, speed_commands
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
@@ -166,7 +166,7 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
         "clamp_speed_m_s": plan.loading.speed_m_s,
-        **adaptive_summary(plan, out),
+        **adaptive_summary(plan, out["step"], out["time_s"], out.columns.get("clamp_speed_m_s")),
         "initial_stiffness_n": fit["initial_slope"] * 100,  # N per unit strain
         "final_stiffness_n": fit["final_slope"] * 100,
         "initial_stiffness_n_m_per_width": fit["initial_slope"] * 100 / width,
@@ -194,24 +194,6 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
             "marks": tension_marks(fit, width, summary["force_at_elongation_n"],
                                    float(100 * elongation.max()))}
     return TensionResult(Path(run_dir), curve, summary, [plot])
-
-
-def adaptive_summary(plan, out) -> dict:
-    """What an adaptive run did (nothing for a fixed-speed one): the steps it took against
-    the fixed-speed run's, and its speed range over the base speed."""
-    if not plan.extra.get("adaptive"):
-        return {}
-    steps = int(out["step"][-1] - out["step"][0])
-    speed = out["clamp_speed_m_s"] / plan.speed_m_s
-    return {"adaptive_loading": {
-        "steps": steps, "fixed_speed_steps": plan.extra["fixed_speed_steps"],
-        "step_ratio": plan.extra["fixed_speed_steps"] / max(steps, 1),
-        "max_speed_factor": float(speed.max()),
-        "mean_speed_factor_after_start": float(speed[out["time_s"] > plan.ramp_time_s].mean())
-        if np.any(out["time_s"] > plan.ramp_time_s) else None,
-        "allowed_speed_factor": plan.extra["max_speed_factor"],
-        "note": "speed factor: clamp speed over the base speed (speed_fraction x wave "
-                "speed); steps: of the loading, the fixed-speed run's from its plan"}}
 
 
 def tension_marks(fit: dict, width_m: float, report: dict, max_pct: float) -> list[dict]:

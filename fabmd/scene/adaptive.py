@@ -34,6 +34,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import inputs
 from ..errors import InputError
 from .plan import RunPlan
@@ -106,7 +108,7 @@ def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float) -> R
 
 
 def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
-                   power_floor_w: float) -> str:
+                   power_floor_w: float, displacement: str = "u") -> str:
     """The LAMMPS text of the adaptive speed (``lammps_templates/adaptive_speed.lmp``):
     it defines ``v_adapt_factor`` (the speed factor) and the halt at the travel; put it
     after the driven outputs (it reads ``external_ref``, ``c_p_damp``, ``c_ke_free``,
@@ -117,6 +119,7 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
         energy_floor_j: strain energy below which KE/U is taken against this floor (a
             slack fabric has almost none).
         power_floor_w: boundary power below which the work shares are taken against it.
+        displacement: the variable (without ``v_``) of the boundary's travel [m].
     """
     x = plan.extra
     interval = x["control_interval_steps"]
@@ -130,4 +133,24 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
                   kinetic_limit=INTERVAL_LIMITS["kinetic_to_strain_energy"],
                   target=x["target"], ramp_time=plan.ramp_time_s, gain=gain,
                   alpha=gain / (interval * plan.time_step_s),
-                  lag_alpha=1.0 / (interval * plan.time_step_s), travel=x["travel_m"])
+                  lag_alpha=1.0 / (interval * plan.time_step_s), travel=x["travel_m"],
+                  displacement=displacement)
+
+
+def adaptive_summary(plan: RunPlan, steps, time_s, speed_m_s) -> dict:
+    """What an adaptive run did (``{}`` for a fixed-speed one): the loading steps it took
+    against the fixed-speed run's and its speed over the base speed (``steps``,
+    ``time_s``, ``speed_m_s``: the curve's samples)."""
+    if not plan.extra.get("adaptive"):
+        return {}
+    taken = int(steps[-1] - steps[0])
+    factor = np.asarray(speed_m_s, float) / plan.speed_m_s
+    after = np.asarray(time_s, float) > plan.ramp_time_s
+    return {"adaptive_loading": {
+        "steps": taken, "fixed_speed_steps": plan.extra["fixed_speed_steps"],
+        "step_ratio": plan.extra["fixed_speed_steps"] / max(taken, 1),
+        "max_speed_factor": float(factor.max()),
+        "mean_speed_factor_after_start": float(factor[after].mean()) if after.any() else None,
+        "allowed_speed_factor": plan.extra["max_speed_factor"],
+        "note": "speed factor: boundary speed over the base speed (speed_fraction x wave "
+                "speed); steps: of the loading, the fixed-speed run's from its plan"}}
