@@ -20,7 +20,14 @@ from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
-from ..scene.adaptive import AdaptiveLoading, adaptive_plan, adaptive_summary, speed_commands
+from ..scene.adaptive import (
+    AdaptiveLoading,
+    adaptive_plan,
+    adaptive_summary,
+    speed_commands,
+    window_mean,
+    window_width_m,
+)
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
@@ -145,6 +152,10 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
     _, _, gauge = test.clamps(coupon)
     width = float(np.ptp(coupon.positions[:, 1]) + coupon.diameters.max())
     elongation = 2 * out["clamp_displacement_m"] / gauge
+    window = window_width_m(plan)
+    if window is not None:  # adaptive: the clamp forces over the fixed run's interval travel
+        for name in ("force_left_n", "force_right_n"):
+            out.columns[name] = window_mean(out["clamp_displacement_m"], out[name], window)
     force = 0.5 * (out["force_left_n"] - out["force_right_n"])
     curve = {
         "time_s": out["time_s"],

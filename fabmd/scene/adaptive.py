@@ -154,3 +154,34 @@ def adaptive_summary(plan: RunPlan, steps, time_s, speed_m_s) -> dict:
         "allowed_speed_factor": plan.extra["max_speed_factor"],
         "note": "speed factor: boundary speed over the base speed (speed_fraction x wave "
                 "speed); steps: of the loading, the fixed-speed run's from its plan"}}
+
+
+def window_width_m(plan: RunPlan) -> float | None:
+    """Travel of the driven boundary over one output interval of the fixed-speed run [m]
+    (None for a fixed-speed plan): an adaptive run's interval means are averaged over it
+    (:func:`window_mean`), so that its curve is as smooth as the fixed run's."""
+    x = plan.extra
+    if not x.get("adaptive"):
+        return None
+    return x["travel_m"] * x["fixed_speed_every"] / x["fixed_speed_steps"]
+
+
+def window_mean(displacement, values, width: float) -> np.ndarray:
+    """Each sample's mean of ``values`` over the travel ``width`` before it.
+
+    ``values[i]`` is the mean over the interval that ends at sample ``i`` (from sample
+    ``i-1``: the interval means of ``means.dat``), so the integral of the values over the
+    travel is piecewise linear in it; each sample gets that integral over
+    [d_i - width, d_i] divided by the travel it spans (less at the start).
+    """
+    d = np.asarray(displacement, float)
+    y = np.asarray(values, float)
+    step = np.diff(d, prepend=d[0])
+    integral = np.cumsum(y * step)
+    start = np.maximum(d - width, d[0])
+    span = d - start
+    inside = np.interp(start, d, integral)
+    out = y.copy()
+    moving = span > 0
+    out[moving] = (integral[moving] - inside[moving]) / span[moving]
+    return out
