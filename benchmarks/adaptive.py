@@ -46,9 +46,11 @@ REPORT = {"tension": ("elongation_pct", "force_n", (1.0, 2.0, 3.0), "force at 1/
 
 
 def fast_scene(scene):
-    """The scene with one fibre per yarn (``--fast``)."""
-    yarns = {name: dataclasses.replace(y, n_fibres=1) for name, y in scene.yarns.items()}
-    return dataclasses.replace(scene, yarns=yarns)
+    """The scene with one fibre per yarn (``--fast``; s/d stays the scene's)."""
+    specs = {fam: dataclasses.replace(spec, n_fibres=1,
+                                      spacing_m=None if spec.count_per_m else spec.spacing_m)
+             for fam, spec in scene.fabric.specs().items()}
+    return dataclasses.replace(scene, fabric=dataclasses.replace(scene.fabric, **specs))
 
 
 def prepared_coupon(scene, test: str, root: Path, engine: Engine):

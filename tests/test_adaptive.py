@@ -61,15 +61,15 @@ def test_scene_table_turns_it_on():
         build_protocol("tension", {"loading_speed": {"speed": 2}})
 
 
-def test_the_plan_keeps_the_fixed_run_and_shortens_start_and_interval():
+def test_the_plan_keeps_the_fixed_run_and_shortens_the_interval():
     fixed = RunPlan(time_step_s=1e-7, steps=40_000, every=200, duration_s=4e-3,
                     speed_m_s=0.1, ramp_time_s=4e-4, damping_time_s=4e-4, gamma_kg_s=1e-3)
     assert adaptive_plan(fixed, AdaptiveLoading(), 1e-4) is fixed
     plan = adaptive_plan(fixed, ON, 1e-4)
     assert plan.every == 25 and plan.steps == 40_000 and plan.steps % plan.every == 0
-    assert plan.ramp_time_s == pytest.approx(5e-5)
-    # the base speed, the time step and the drag are the fixed run's
-    assert (plan.speed_m_s, plan.time_step_s, plan.gamma_kg_s) == (0.1, 1e-7, 1e-3)
+    # the base speed, smooth start, time step and drag are the fixed run's
+    assert (plan.speed_m_s, plan.ramp_time_s, plan.time_step_s, plan.gamma_kg_s) == \
+        (0.1, 4e-4, 1e-7, 1e-3)
     x = plan.extra
     assert x["fixed_speed_steps"] == 40_000 and x["fixed_speed_every"] == 200
     assert x["control_interval_steps"] == 100 and x["travel_m"] == 1e-4
@@ -128,7 +128,9 @@ def test_straight_fibres_speed_up_and_keep_n_ea_epsilon(tmp_path):
 
     n = 4
     coupon = parallel_fibres(n=n)
-    adaptive = _tension(loading_speed=dataclasses.replace(ON, max_speed_factor=4))
+    # at 4x the base speed the undamped straight fibres ring by +-3 % (the measures, energy
+    # ratios, are quadratic in such a ripple): 2x keeps the closed form within 1 %
+    adaptive = _tension(loading_speed=dataclasses.replace(ON, max_speed_factor=2))
     result = adaptive.run(coupon, tmp_path / "a", engine=Engine(progress=False))
     s, c = result.summary, result.curve
     ea = SOFT_GLASS.modulus_pa * np.pi * 0.5e-3**2 / 4
@@ -136,11 +138,11 @@ def test_straight_fibres_speed_up_and_keep_n_ea_epsilon(tmp_path):
         assert s["force_at_elongation_n"][f"{strain:g}"] == pytest.approx(
             n * ea * strain / 100, rel=0.02)
     run = s["adaptive_loading"]
-    assert run["max_speed_factor"] == pytest.approx(4.0, rel=1e-6)
-    assert run["step_ratio"] > 2.0 and run["steps"] < adaptive.plan(coupon).steps
+    assert run["max_speed_factor"] == pytest.approx(2.0, rel=1e-6)
+    assert run["step_ratio"] > 1.6 and run["steps"] < adaptive.plan(coupon).steps
     assert c["elongation_pct"][-1] >= 1.2  # the halt: at or past the travel
     speed = c["clamp_speed_m_s"] / adaptive.plan(coupon).speed_m_s
-    assert speed.min() >= 0 and speed.max() <= 4.0 + 1e-9
+    assert speed.min() >= 0 and speed.max() <= 2.0 + 1e-9
     # no jump: between samples the speed changes by well under the base speed
     assert np.abs(np.diff(speed)).max() < 0.5
     force = c["force_n"]
