@@ -107,10 +107,17 @@ def test_picture_frame_input_integrates_the_adapted_speed():
     plain = PictureFrame().input_text(square)
     assert "adapt" not in plain
     text = PictureFrame(loading_speed=ON).input_text(square)
-    assert 'variable        d equal "v_adapt_d"' in text
-    assert 'variable        d_next equal "v_adapt_d+dt*v_dd_next"' in text
-    assert "fix             adapt_integrate all controller 1 -1.0" in text
+    assert 'variable        d equal "sqrt(2)*' in text and "xcm(clamps,x)" in text
+    assert 'variable        d_next equal "v_d+dt*v_dd_next"' in text
     assert "halt" in text and "v_d >= " in text
+    # the corner's travel read back from the clamps: 0 where the model's clamps are
+    frame = PictureFrame(loading_speed=ON)
+    g, sel = frame.frame(square), frame.clamped(square)
+    formula = frame.corner_travel(square)
+    centre = np.average(square.positions[sel, :2], axis=0, weights=square.masses[sel])
+    value = eval(formula.replace("sqrt", "np.sqrt").replace("xcm(clamps,x)", repr(centre[0]))
+                 .replace("xcm(clamps,y)", repr(centre[1])))
+    assert abs(value) < 1e-9 * g.frame_length_m
 
 
 # -- LAMMPS ---------------------------------------------------------------------------------

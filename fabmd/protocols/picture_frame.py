@@ -302,18 +302,15 @@ class PictureFrame(ClampedTest):
                   "velocity": load.lammps_velocity(),
                   "displacement_next": load.lammps_displacement("t_next"),
                   "velocity_next": load.lammps_velocity("t_next")}
-        if adaptive:  # the corner's travel integrates the adapted speed (one step ahead)
+        if adaptive:  # the corner moves on by the adapted speed, from where the frame is
             k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
             n = int(model.fibre_bond_mask().sum())
             plan = self.plan(model)
-            outputs += "\n" + "\n".join([
-                speed_commands(plan, power_ref, n * ref_force**2 / (2 * k),
-                               ref_force * plan.speed_m_s, displacement="d"),
-                render("adaptive_integrate", clock="frame_clock", displacement="d",
-                       speed="f_frame_clock[2]")])
-            motion = {"displacement": "v_adapt_d",
+            outputs += "\n" + speed_commands(plan, power_ref, n * ref_force**2 / (2 * k),
+                                             ref_force * plan.speed_m_s, displacement="d")
+            motion = {"displacement": self.corner_travel(model),
                       "velocity": f"({motion['velocity']})*v_adapt_factor",
-                      "displacement_next": "v_adapt_d+dt*v_dd_next",
+                      "displacement_next": "v_d+dt*v_dd_next",
                       "velocity_next": f"({motion['velocity_next']})*v_adapt_factor"}
         text = render("picture_frame", frame_length=g.frame_length_m, ax=g.pin_a[0],
                       ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
@@ -321,6 +318,23 @@ class PictureFrame(ClampedTest):
                       relax=self.relax_block(model, "clamps", "free", ref_force),
                       **motion, damping=damping, outputs=outputs)
         return self.scene_text(model, dt, text)
+
+    def corner_travel(self, model: BeadModel) -> str:
+        """LAMMPS formula of the pulled corner's travel d [m], read back from the clamps'
+        centre of mass (adaptive loading: the travel is the integral of the speed, and a
+        resumed run finds it there too).
+
+        A clamped bead sits at A + xi e1 + eta e2, so the clamps' centre relative to pin A
+        sums to S = (mean xi + mean eta)(cos phi + sin phi) = S0 sqrt(2) cos(theta), and
+        d = 2 L cos(theta) - sqrt(2) L = sqrt(2) L (S / S0 - 1), S0 its value at the start
+        (the clamps are held while relaxing)."""
+        g = self.frame(model)
+        sel = self.clamped(model)
+        m, p = model.masses[sel], model.positions[sel]
+        s0 = float(np.sum(m * ((p[:, 0] - g.pin_a[0]) + (p[:, 1] - g.pin_a[1]))) / np.sum(m))
+        ax, ay, length = fmt(g.pin_a[0]), fmt(g.pin_a[1]), fmt(g.frame_length_m)
+        return (f"sqrt(2)*{length}*(((xcm(clamps,x)-({ax}))+(xcm(clamps,y)-({ay})))"
+                f"/{fmt(s0)}-1)")
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
