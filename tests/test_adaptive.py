@@ -73,6 +73,9 @@ def test_the_plan_keeps_the_fixed_run_and_shortens_the_interval():
     x = plan.extra
     assert x["fixed_speed_steps"] == 40_000 and x["fixed_speed_every"] == 200
     assert x["control_interval_steps"] == 100 and x["travel_m"] == 1e-4
+    # the control interval spans at least control_transits wave transits of the specimen
+    slow = adaptive_plan(fixed, ON, 1e-4, transit_s=1e-5)
+    assert slow.extra["control_interval_steps"] == 500  # 5 x 1e-5 s / 1e-7 s
 
 
 def test_window_mean_averages_interval_means_over_the_travel():

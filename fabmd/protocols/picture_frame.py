@@ -172,7 +172,9 @@ class PictureFrame(ClampedTest):
         self.loading_speed.check_speed("picture_frame", self.speed_fraction)
 
     def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
-        return adaptive_plan(plan, self.loading_speed, self.travel_m(model))
+        length = float(np.ptp(model.positions[:, :2], axis=0).max())  # the longest fibre
+        return adaptive_plan(plan, self.loading_speed, self.travel_m(model),
+                             length / self.wave_speed_m_s(model))
 
     # -- geometry ---------------------------------------------------------------------
     def frame(self, model: BeadModel) -> FrameGeometry:

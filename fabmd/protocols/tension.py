@@ -73,7 +73,9 @@ class Tension(EndClampedTest):
         super().check_fields()
 
     def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
-        return adaptive_plan(plan, self.loading_speed, self.travel_m(model))
+        length = float(np.ptp(model.positions[:, :2], axis=0).max())  # the longest fibre
+        return adaptive_plan(plan, self.loading_speed, self.travel_m(model),
+                             length / self.wave_speed_m_s(model))
 
     def travel_m(self, model: BeadModel) -> float:
         """Each clamp moves half the elongation of the gauge length."""

@@ -61,7 +61,11 @@ class AdaptiveLoading:
             limits, in (0, 1].
         gain: change of ln(speed factor) per control interval per unit of
             ln(measure / target), in (0, 1].
-        control_interval: output intervals per control interval (>= 1).
+        control_interval: fewest output intervals per control interval (>= 1).
+        control_transits: fewest axial wave transits of the specimen per control interval
+            (>= 1): the measures of a shorter one answer the controller's own last
+            speed change (a control interval under one transit made the picture-frame
+            speed oscillate between 1x and 2x and moved its forces by 10-60 %).
     """
 
     adaptive: bool = False
@@ -69,6 +73,7 @@ class AdaptiveLoading:
     target: float = 0.25
     gain: float = 0.5
     control_interval: int = 4
+    control_transits: float = 5.0
 
     def __post_init__(self):
         if not isinstance(self.adaptive, bool):
@@ -78,6 +83,7 @@ class AdaptiveLoading:
         inputs.in_range("loading_speed.target", self.target, 0.0, 1.0, low_open=True)
         inputs.in_range("loading_speed.gain", self.gain, 0.0, 1.0, low_open=True)
         inputs.positive_int("loading_speed.control_interval", self.control_interval)
+        inputs.in_range("loading_speed.control_transits", self.control_transits, 1.0, 1000.0)
 
     def check_speed(self, section: str, speed_fraction: float) -> None:
         """The fastest speed stays within :data:`MAX_SPEED_FRACTION` of the wave speed."""
@@ -91,18 +97,23 @@ class AdaptiveLoading:
                 f"{MAX_SPEED_FRACTION / speed_fraction:g})")
 
 
-def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float) -> RunPlan:
+def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float,
+                  transit_s: float = 0.0) -> RunPlan:
     """The fixed-speed ``plan`` made adaptive (see the module docstring); unchanged when
-    ``loading`` is not adaptive. ``extra`` keeps the fixed run's steps and output interval,
-    the travel and the control settings."""
+    ``loading`` is not adaptive. ``transit_s``: the axial wave transit time of the
+    specimen [s] (its length over the fibres' wave speed). ``extra`` keeps the fixed run's
+    steps and output interval, the travel and the control settings."""
     if not loading.adaptive:
         return plan
     k = loading.max_speed_factor
     every = max(1, int(plan.every // k))
     steps = every * math.ceil(plan.steps / every)
+    transits = math.ceil(loading.control_transits * transit_s / (every * plan.time_step_s)
+                         - 1e-9)  # not one more for a rounding error
     extra = {**plan.extra, "adaptive": True, "max_speed_factor": k,
              "target": loading.target, "gain": loading.gain,
-             "control_interval_steps": every * loading.control_interval,
+             "control_interval_steps": every * max(loading.control_interval, transits),
+             "transit_s": transit_s,
              "travel_m": travel_m, "fixed_speed_steps": plan.steps,
              "fixed_speed_every": plan.every}
     return dataclasses.replace(plan, every=every, steps=steps, extra=extra)
