@@ -12,7 +12,7 @@ import pytest
 from fabmd.analysis import grid_edges, surface_shear_angle_field
 from fabmd.analysis.synthetic import woven_sheet
 from fabmd.errors import InputError
-from fabmd.protocols.drape import Drape, contact_angle_rad
+from fabmd.protocols.drape import Drape, DrapeGeometry, contact_angle_rad
 
 from .fabrics import plain_weave_cell
 
@@ -211,6 +211,11 @@ def test_blank_holder_force_holds_its_set_value(small_blank, tmp_path):
     plan = read_plan(result.run_dir)  # the summary reports the plan the run was written with
     assert (s["time_step_s"], s["steps"]) == (plan.time_step_s, plan.steps)
     assert s["punch_speed_m_s"] == plan.speed_m_s
+    # punch_reach: the punch's reach against its zone (it held the zone radii alone)
+    reach = s["punch_reach"]
+    assert reach["touching_beads"] > 0 and reach["zone_holds"]
+    assert 0 < reach["furthest_touching_start_radius_m"] <= reach["punch_zone_radius_m"]
+    assert reach["punch_zone_radius_m"] == s["tool_zone_radii_m"]["punch_reach"]
     for name in ("curve.csv", "summary.json", "curve.png", "shear_angle.png",
                  "shear_angle.csv", "shear_angle.npz", "final.vtu", "shape.png",
                  "trajectory.h5"):
@@ -254,7 +259,7 @@ def test_quarter_and_full_model_agree(tmp_path):
 def test_blank_shear_of_a_sheared_turned_and_drawn_blank():
     """The whole-blank shear is the imposed in-plane shear; a rigid turn or a pure draw-in
     gives none."""
-    from fabmd.protocols.drape import DrapeGeometry, blank_shear_deg
+    from fabmd.protocols.drape import blank_shear_deg
 
     xs = np.linspace(-0.05, 0.05, 21)
     ref = np.array([(x, y, 0.0) for x in xs for y in xs])
@@ -270,3 +275,26 @@ def test_blank_shear_of_a_sheared_turned_and_drawn_blank():
     turned = ref @ np.array([[np.cos(a), np.sin(a), 0], [-np.sin(a), np.cos(a), 0], [0, 0, 1]])
     assert abs(blank_shear_deg(ref, turned, g)) < 1e-9
     assert abs(blank_shear_deg(ref, ref * np.array([0.9, 0.9, 1.0]), g)) < 1e-12
+
+
+def test_punch_reach_is_how_far_out_the_fabric_on_the_punch_started():
+    """summary["punch_reach"] held the tool-zone radii (stop 15's note): it is the start
+    radius of the furthest bead on the punch against the punch zone's radius."""
+    from fabmd.protocols.drape.measures import punch_reach
+
+    g = DrapeGeometry(quarter=False, radius_m=0.02, die_radius_m=0.023, holder_radius_m=0.023,
+                      z_die_m=0.0, z_holder_m=0.0, punch_z_m=0.03, gap_m=0.0,
+                      thickness_m=1e-3, spacing_m=5e-3, half_size_m=(0.05, 0.05),
+                      punch_reach_m=0.03, die_reach_m=0.02, contact_angle_rad=1.0,
+                      flange_reach_m=0.04, face_radius_m=0.2, diameter_m=1e-3, sym_x=(),
+                      sym_y=())
+    ref = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.025, 0.0, 0.0], [0.04, 0.0, 0.0]])
+    travel = 0.02  # the punch centre ends at z = 0.01: beads on its sphere touch it
+    final = np.array([[0.0, 0.0, -0.0105], [0.0, 0.012, -0.006], [0.015, 0.0, -0.0032],
+                      [0.04, 0.0, 0.0]])  # the last one stayed flat, clear of the punch
+    out = punch_reach(ref, final, g, travel, zone_radius_m=0.03)
+    assert out["touching_beads"] == 3
+    assert out["furthest_touching_start_radius_m"] == pytest.approx(0.025)
+    assert out["zone_holds"] and out["punch_zone_radius_m"] == 0.03
+    assert not punch_reach(ref, final, g, travel, zone_radius_m=0.02)["zone_holds"]
+    assert punch_reach(ref, ref, g, 0.0, 0.03)["furthest_touching_start_radius_m"] is None

@@ -4,6 +4,7 @@ that gives them (exit status, signals, one JSON object, the same numbers)."""
 import argparse
 import io
 import json
+import os
 import signal
 import subprocess
 import time
@@ -199,3 +200,51 @@ def test_without_mpirun_the_default_runs_serially_and_says_so(monkeypatch, capsy
     args = argparse.Namespace(command="demo", ranks=None, backend="inprocess", threads=1)
     assert cli_ranks.relaunch_if_worth_it(args, ["demo"]) is None
     assert "no mpirun" in capsys.readouterr().err
+
+
+# -- busy cores now, not a minute ago ---------------------------------------------------------
+
+def _stat(user, nice, system, idle, iowait=0):
+    return (f"cpu  {user} {nice} {system} {idle} {iowait} 0 0 0 0 0\n"
+            f"cpu0 {user} {nice} {system} {idle} {iowait} 0 0 0 0 0\nintr 1 2 3\n")
+
+
+def test_busy_cores_come_from_two_samples_of_proc_stat(monkeypatch):
+    """One other job on a 2-core machine over the window: one busy core, whatever the
+    load average says (it still counts a run that ended a minute ago)."""
+    monkeypatch.setattr(ranks.os, "cpu_count", lambda: 2)
+    samples = iter([_stat(1000, 50, 100, 5000, 10), _stat(1040, 50, 100, 5040, 10)])
+    slept = []
+    busy = ranks.busy_cores(0.4, read=lambda: next(samples), sleep=slept.append)
+    assert busy == pytest.approx(1.0) and slept == [0.4]
+    # niced jobs count as busy, iowait as idle
+    samples = iter([_stat(0, 0, 0, 0, 0), _stat(0, 20, 0, 40, 20)])
+    assert ranks.busy_cores(read=lambda: next(samples), sleep=lambda s: None) == \
+        pytest.approx(0.5)
+    # a quiet machine now: every core free even with a high 1-minute load average
+    monkeypatch.setattr(ranks.os, "getloadavg", lambda: (1.9, 1.0, 0.5))
+    monkeypatch.setattr(ranks, "busy_cores", lambda: 0.1)
+    assert ranks.free_cores(2) == 2
+    monkeypatch.setattr(ranks, "busy_cores", lambda: 0.8)
+    assert ranks.free_cores(2) == 1
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/stat"), reason="no /proc/stat (not Linux)")
+def test_busy_cores_reads_this_machine():
+    busy = ranks.busy_cores(0.05)
+    assert busy is not None and 0.0 <= busy <= (os.cpu_count() or 1) + 1e-9
+
+
+def test_without_proc_stat_the_load_average_decides(monkeypatch):
+    monkeypatch.setattr(ranks.os, "cpu_count", lambda: 2)
+
+    def missing():
+        raise OSError("no /proc/stat")
+
+    assert ranks.busy_cores(read=missing, sleep=lambda s: None) is None
+    assert ranks.busy_cores(read=lambda: "intr 1\n", sleep=lambda s: None) is None
+    monkeypatch.setattr(ranks, "busy_cores", lambda: None)
+    monkeypatch.setattr(ranks.os, "getloadavg", lambda: (1.2, 0.0, 0.0))
+    assert ranks.free_cores(2) == 1
+    monkeypatch.setattr(ranks.os, "getloadavg", lambda: (0.2, 0.0, 0.0))
+    assert ranks.free_cores(2) == 2

@@ -10,15 +10,18 @@ The choice, in order of precedence: ``--np N`` (``requested``), the environment
 variable ``FABMD_NP`` (CI and the test suite set ``FABMD_NP=1`` so that parallel test
 workers do not oversubscribe the cores), else the usable cores of this process
 (``os.sched_getaffinity``: what a batch scheduler or ``taskset`` grants, not the
-machine's total) less those other jobs keep busy (:func:`free_cores`), limited by the
-model size. Busy cores count because MPI ranks wait for each other by polling: on the
-2-core development machine with a load of 11, 2 ranks ran every coupon size 1.9-14x
-slower than one (``benchmarks/RESULTS.md`` "Ranks").
+machine's total) less those other jobs keep busy (:func:`free_cores`: the busy share of
+the CPU time in ``/proc/stat`` over a fraction of a second, :func:`busy_cores`; the 1-minute
+load average only where ``/proc/stat`` is missing, since it still counts a run that ended
+a minute ago), limited by the model size. Busy cores count because MPI ranks wait for
+each other by polling: on the 2-core development machine with a load of 11, 2 ranks ran
+every coupon size 1.9-14x slower than one (``benchmarks/RESULTS.md`` "Ranks").
 """
 
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -28,6 +31,11 @@ from ..errors import InputError
 ENV_VARIABLE = "FABMD_NP"
 #: fewest beads per rank for which another rank pays (see the module docstring)
 MIN_BEADS_PER_RANK = 4000
+#: how long :func:`busy_cores` watches the machine, s (long enough for 40 jiffies at
+#: 100 Hz on two cores, short enough not to be noticed at start-up)
+SAMPLE_WINDOW_S = 0.4
+#: where the kernel counts CPU time (Linux)
+PROC_STAT = "/proc/stat"
 
 
 @dataclass(frozen=True)
@@ -53,14 +61,53 @@ def usable_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def cpu_times(text: str) -> tuple[int, int]:
+    """(busy, total) jiffies of the whole machine from the text of ``/proc/stat``.
+
+    Its first line is ``cpu user nice system idle iowait irq softirq steal ...``; idle and
+    iowait are idle, the rest (niced jobs too) busy. Guest time is already in user.
+    """
+    for line in text.splitlines():
+        fields = line.split()
+        if fields and fields[0] == "cpu":
+            values = [int(v) for v in fields[1:9]]
+            idle = sum(values[3:5])
+            return sum(values) - idle, sum(values)
+    raise ValueError("no 'cpu' line in /proc/stat")
+
+
+def busy_cores(window_s: float = SAMPLE_WINDOW_S,
+               read: Callable[[], str] | None = None,
+               sleep: Callable[[float], None] = time.sleep) -> float | None:
+    """Cores of the whole machine kept busy now, from two samples of ``/proc/stat``
+    ``window_s`` seconds apart (this process sleeps meanwhile, so the busy time is other
+    jobs'); None where ``/proc/stat`` cannot be read. ``read`` returns the file's text
+    (tests inject samples)."""
+    if read is None:
+        def read() -> str:
+            with open(PROC_STAT) as handle:
+                return handle.read()
+    try:
+        busy0, total0 = cpu_times(read())
+        sleep(window_s)
+        busy1, total1 = cpu_times(read())
+    except (OSError, ValueError):
+        return None
+    if total1 <= total0:
+        return None
+    return (busy1 - busy0) / (total1 - total0) * (os.cpu_count() or 1)
+
+
 def free_cores(cores: int | None = None, load: float | None = None) -> int:
     """Usable cores that other jobs do not keep busy (at least 1).
 
-    ``load`` (default: the 1-minute load average) counts runnable processes on the whole
-    machine; the part of it that cores outside this process's affinity could carry is
-    not held against it. Where the platform has no load average, every usable core.
+    ``load`` (default: :func:`busy_cores`, else the 1-minute load average) counts busy
+    cores on the whole machine; the part of it that cores outside this process's affinity
+    could carry is not held against it. Where neither measure exists, every usable core.
     """
     cores = usable_cores() if cores is None else cores
+    if load is None:
+        load = busy_cores()
     if load is None:
         try:
             load = os.getloadavg()[0]
@@ -93,7 +140,7 @@ def choose_ranks(beads: int | None | Callable[[], int | None], requested: int | 
             ``requested`` nor ``FABMD_NP`` decides).
         requested: ``--np`` (None: not given).
         cores: usable cores (default :func:`usable_cores`).
-        load: the machine's load (default: its 1-minute load average; see
+        load: busy cores of the machine (default: measured now; see
             :func:`free_cores`).
 
     Raises:

@@ -220,9 +220,15 @@ class DrivenTest:
         nominal = self.nominal_loading(model)
         tau = self.plan_damping_time_s(duration)
         gamma = float(np.median(model.masses)) / tau
-        return RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=duration,
+        plan = RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=duration,
                        speed_m_s=nominal.speed_m_s * k, ramp_time_s=nominal.ramp_time_s / k,
                        damping_time_s=tau, gamma_kg_s=gamma)
+        return self.plan_loading(plan, model)
+
+    def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
+        """The fixed-speed ``plan`` adapted to the test's loading (a protocol with
+        adaptive loading: :func:`fabmd.scene.adaptive.adaptive_plan`); unchanged here."""
+        return plan
 
     def read_plan(self, run_dir: Path, model: BeadModel) -> RunPlan:
         """The plan ``run_dir`` was run with (``plan.json``); derived again for a folder

@@ -28,7 +28,7 @@ relaxation, and stays shorter for the test.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -42,8 +42,17 @@ from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..results.figure import report_marks
 from ..scene import blocks
+from ..scene.adaptive import (
+    AdaptiveLoading,
+    adaptive_plan,
+    adaptive_summary,
+    speed_commands,
+    window_mean,
+    window_width_m,
+)
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
+from ..scene.plan import RunPlan
 from ..scene.templates import fmt, render
 from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
 
@@ -120,6 +129,8 @@ class PictureFrame(ClampedTest):
             locking-angle method (:func:`fabmd.results.curves.locking_angle`).
         locking_factor: the force over the initial line that marks the departure
             from it (> 1).
+        loading_speed: adaptive corner speed (opt-in, :mod:`fabmd.scene.adaptive`); the
+            speed history is the curve's ``corner_speed_m_s``.
     """
 
     protocol = PROTOCOL
@@ -139,6 +150,7 @@ class PictureFrame(ClampedTest):
     locking_initial_deg: tuple[float, float] = (5.0, 15.0)
     locking_factor: float = 2.0
     speed_fraction: float = 1e-3
+    loading_speed: AdaptiveLoading = field(default_factory=AdaptiveLoading)
 
     def check_fields(self) -> None:
         inputs.in_range("picture_frame.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
@@ -154,6 +166,15 @@ class PictureFrame(ClampedTest):
         inputs.in_range("picture_frame.locking_initial_deg[1]", hi, lo, 80, low_open=True)
         inputs.in_range("picture_frame.locking_factor", self.locking_factor, 1, 100,
                         low_open=True)
+        if not isinstance(self.loading_speed, AdaptiveLoading):
+            raise InputError(f"picture_frame.loading_speed must be an AdaptiveLoading, got "
+                             f"{self.loading_speed!r}")
+        self.loading_speed.check_speed("picture_frame", self.speed_fraction)
+
+    def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
+        length = float(np.ptp(model.positions[:, :2], axis=0).max())  # the longest fibre
+        return adaptive_plan(plan, self.loading_speed, self.travel_m(model),
+                             length / self.wave_speed_m_s(model))
 
     # -- geometry ---------------------------------------------------------------------
     def frame(self, model: BeadModel) -> FrameGeometry:
@@ -272,19 +293,50 @@ class PictureFrame(ClampedTest):
             vx=f"v_frame_lxx*(x-({ax}))+v_frame_lxy*(y-({ay}))",
             vy=f"v_frame_lxy*(x-({ax}))+v_frame_lxx*(y-({ay}))",
             tools="frame"))
-        outputs = self.outputs_block(model, power, power_ref, print_values="${d} ${shear_deg}",
-                                     print_names="displacement_m shear_angle_lammps_deg",
-                                     thermo_values="v_d v_shear_deg c_p_ext",
-                                     damping_power=damping_power)
+        adaptive = self.loading_speed.adaptive
+        outputs = self.outputs_block(
+            model, power, power_ref,
+            print_values="${d} ${shear_deg} ${dd}" if adaptive else "${d} ${shear_deg}",
+            print_names="displacement_m shear_angle_lammps_deg corner_speed_m_s" if adaptive
+            else "displacement_m shear_angle_lammps_deg",
+            thermo_values="v_d v_shear_deg c_p_ext", damping_power=damping_power)
+        motion = {"displacement": load.lammps_displacement(),
+                  "velocity": load.lammps_velocity(),
+                  "displacement_next": load.lammps_displacement("t_next"),
+                  "velocity_next": load.lammps_velocity("t_next")}
+        if adaptive:  # the corner moves on by the adapted speed, from where the frame is
+            k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
+            n = int(model.fibre_bond_mask().sum())
+            plan = self.plan(model)
+            outputs += "\n" + speed_commands(plan, power_ref, n * ref_force**2 / (2 * k),
+                                             ref_force * plan.speed_m_s, displacement="d")
+            motion = {"displacement": self.corner_travel(model),
+                      "velocity": f"({motion['velocity']})*v_adapt_factor",
+                      "displacement_next": "v_d+dt*v_dd_next",
+                      "velocity_next": f"({motion['velocity_next']})*v_adapt_factor"}
         text = render("picture_frame", frame_length=g.frame_length_m, ax=g.pin_a[0],
                       ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
                       y_hi=g.inner[3], pretension=self.pretension_block(model),
                       relax=self.relax_block(model, "clamps", "free", ref_force),
-                      displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
-                      displacement_next=load.lammps_displacement("t_next"),
-                      velocity_next=load.lammps_velocity("t_next"),
-                      damping=damping, outputs=outputs)
+                      **motion, damping=damping, outputs=outputs)
         return self.scene_text(model, dt, text)
+
+    def corner_travel(self, model: BeadModel) -> str:
+        """LAMMPS formula of the pulled corner's travel d [m], read back from the clamps'
+        centre of mass (adaptive loading: the travel is the integral of the speed, and a
+        resumed run finds it there too).
+
+        A clamped bead sits at A + xi e1 + eta e2, so the clamps' centre relative to pin A
+        sums to S = (mean xi + mean eta)(cos phi + sin phi) = S0 sqrt(2) cos(theta), and
+        d = 2 L cos(theta) - sqrt(2) L = sqrt(2) L (S / S0 - 1), S0 its value at the start
+        (the clamps are held while relaxing)."""
+        g = self.frame(model)
+        sel = self.clamped(model)
+        m, p = model.masses[sel], model.positions[sel]
+        s0 = float(np.sum(m * ((p[:, 0] - g.pin_a[0]) + (p[:, 1] - g.pin_a[1]))) / np.sum(m))
+        ax, ay, length = fmt(g.pin_a[0]), fmt(g.pin_a[1]), fmt(g.frame_length_m)
+        return (f"sqrt(2)*{length}*(((xcm(clamps,x)-({ax}))+(xcm(clamps,y)-({ay})))"
+                f"/{fmt(s0)}-1)")
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
@@ -311,12 +363,17 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     d = out["displacement_m"]
     gamma = shear_angle_from_displacement_deg(d, g.frame_length_m)
     force = interval_force(d, out.external_work_j)
+    window = window_width_m(plan)
+    if window is not None:  # adaptive: the force over the fixed run's interval travel
+        force = window_mean(d, force, window)
     fs = shear_force_n(force, d, g.frame_length_m)
     fnorm = normalised_shear_force_n_m(fs, g.frame_length_m, g.fabric_length_m)
     curve = {"time_s": out["time_s"], "displacement_m": d, "shear_angle_deg": gamma,
              "frame_angle_deg": np.degrees(frame_angle_rad(d, g.frame_length_m)),
              "frame_force_n": force, "shear_force_n": fs, "normalised_force_n_m": fnorm,
              **energy_columns(out)}
+    if "corner_speed_m_s" in out.columns:  # adaptive loading: the speed history
+        curve["corner_speed_m_s"] = out["corner_speed_m_s"]
     dmax = test.max_displacement(model)
     # by a method that reads the curve only up to a little past locking (not the last part)
     lock = locking_angle(gamma, fnorm, initial_deg=test.locking_initial_deg,
@@ -339,6 +396,8 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
         "corner_speed_m_s": plan.loading.speed_m_s,
+        **adaptive_summary(plan, out["step"], out["time_s"],
+                           out.columns.get("corner_speed_m_s")),
         "max_displacement_m": dmax,
         "max_shear_angle_deg": float(gamma.max()),
         "initial_shear_stiffness_n_m_per_rad": initial,

@@ -11,16 +11,26 @@ kinetic/strain energy ratio over the run and an energy balance
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .. import inputs
+from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
+from ..scene.adaptive import (
+    AdaptiveLoading,
+    adaptive_plan,
+    adaptive_summary,
+    speed_commands,
+    window_mean,
+    window_width_m,
+)
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
+from ..scene.plan import RunPlan
 from ..scene.templates import fmt, render
 from .driven import DrivenResult, clamp_power, energy_columns, read_outputs
 from .end_clamps import EndClampedTest
@@ -40,6 +50,8 @@ class Tension(EndClampedTest):
     Args:
         max_elongation_pct: elongation at the end of the test [%] (0, 50].
         report_elongations_pct: elongations at which forces are reported.
+        loading_speed: adaptive loading speed (opt-in, :mod:`fabmd.scene.adaptive`); the
+            speed history is the curve's ``clamp_speed_m_s``.
     """
 
     protocol = PROTOCOL
@@ -49,11 +61,21 @@ class Tension(EndClampedTest):
 
     max_elongation_pct: float = 3.0
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
+    loading_speed: AdaptiveLoading = field(default_factory=AdaptiveLoading)
 
     def check_fields(self) -> None:
         inputs.in_range("tension.max_elongation_pct", self.max_elongation_pct, 0, 50,
                         low_open=True)
+        if not isinstance(self.loading_speed, AdaptiveLoading):
+            raise InputError(f"tension.loading_speed must be an AdaptiveLoading, got "
+                             f"{self.loading_speed!r}")
+        self.loading_speed.check_speed("tension", self.speed_fraction)
         super().check_fields()
+
+    def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
+        length = float(np.ptp(model.positions[:, :2], axis=0).max())  # the longest fibre
+        return adaptive_plan(plan, self.loading_speed, self.travel_m(model),
+                             length / self.wave_speed_m_s(model))
 
     def travel_m(self, model: BeadModel) -> float:
         """Each clamp moves half the elongation of the gauge length."""
@@ -74,16 +96,46 @@ class Tension(EndClampedTest):
         damping, damping_power = self.drag_block(model, AffineField(
             vx=f"v_v*(2*x-({fmt(left + right)}))/({fmt(right - left)}+2*v_u)", vy="0",
             tools="clamps"))
+        adaptive = self.loading_speed.adaptive
         outputs = self.outputs_block(
             model, power, power_ref, mean_values="c_f_left c_f_right",
-            mean_names="force_left_n force_right_n", print_values="${u}",
-            print_names="clamp_displacement_m", thermo_values="v_u c_f_left c_f_right",
-            damping_power=damping_power)
+            mean_names="force_left_n force_right_n",
+            print_values="${u} ${v}" if adaptive else "${u}",
+            print_names="clamp_displacement_m clamp_speed_m_s" if adaptive
+            else "clamp_displacement_m",
+            thermo_values="v_u v_v c_f_left c_f_right" if adaptive
+            else "v_u c_f_left c_f_right", damping_power=damping_power)
+        displacement, velocity = load.lammps_displacement(), load.lammps_velocity()
+        moves = ("v_u", "v_u_neg")
+        if adaptive:  # the clamps integrate the speed; u is read back from them
+            outputs += "\n" + self.adaptive_block(model, power_ref, ref_force)
+            displacement, velocity = self.clamp_travel(model), f"({velocity})*v_adapt_factor"
+            moves = ("NULL", "NULL")
         text = render("tension", x_left=left, x_right=right,
                       relax=self.relax_block(model, "clamps", "free", ref_force),
-                      displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
+                      displacement=displacement, velocity=velocity,
+                      right_displacement=moves[0], left_displacement=moves[1],
                       damping=damping, outputs=outputs)
         return self.scene_text(model, dt, text, extra, header=header)
+
+    def clamp_travel(self, model: BeadModel) -> str:
+        """LAMMPS formula of the clamps' mean travel [m] from their centres of mass (each
+        clamp's starting centre from the model: the clamps are held while relaxing)."""
+        left, right, _ = self.clamps(model)
+        x, m = model.positions[:, 0], model.masses
+        x0 = [float(np.sum(m[sel] * x[sel]) / np.sum(m[sel])) for sel in (x < left, x > right)]
+        return (f"0.5*((xcm(clamp_right,x)-({fmt(x0[1])}))"
+                f"-(xcm(clamp_left,x)-({fmt(x0[0])})))")
+
+    def adaptive_block(self, model: BeadModel, external_ref: str, ref_force: float) -> str:
+        """The adaptive speed's LAMMPS text (:func:`fabmd.scene.adaptive.speed_commands`);
+        floors: every fibre bond at ``ref_force`` (strain energy), one fibre pulled with
+        it at the base speed (power)."""
+        k = max(bt.spring_n_per_m for bt in model.fibre_bond_types())
+        n = int(model.fibre_bond_mask().sum())
+        plan = self.plan(model)
+        return speed_commands(plan, external_ref, n * ref_force**2 / (2 * k),
+                              ref_force * plan.speed_m_s)
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> TensionResult:
@@ -102,6 +154,10 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
     _, _, gauge = test.clamps(coupon)
     width = float(np.ptp(coupon.positions[:, 1]) + coupon.diameters.max())
     elongation = 2 * out["clamp_displacement_m"] / gauge
+    window = window_width_m(plan)
+    if window is not None:  # adaptive: the clamp forces over the fixed run's interval travel
+        for name in ("force_left_n", "force_right_n"):
+            out.columns[name] = window_mean(out["clamp_displacement_m"], out[name], window)
     force = 0.5 * (out["force_left_n"] - out["force_right_n"])
     curve = {
         "time_s": out["time_s"],
@@ -112,6 +168,8 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         "force_right_n": -out["force_right_n"],
         **energy_columns(out),
     }
+    if "clamp_speed_m_s" in out.columns:  # adaptive loading: the speed history
+        curve["clamp_speed_m_s"] = out["clamp_speed_m_s"]
     fit = bilinear_fit(100 * elongation, force)
     summary = {
         "protocol": PROTOCOL,
@@ -121,6 +179,7 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
         "clamp_speed_m_s": plan.loading.speed_m_s,
+        **adaptive_summary(plan, out["step"], out["time_s"], out.columns.get("clamp_speed_m_s")),
         "initial_stiffness_n": fit["initial_slope"] * 100,  # N per unit strain
         "final_stiffness_n": fit["final_slope"] * 100,
         "initial_stiffness_n_m_per_width": fit["initial_slope"] * 100 / width,

@@ -97,3 +97,24 @@ def blank_shear_deg(reference: np.ndarray, final: np.ndarray, g: DrapeGeometry) 
     shear = (np.mean(np.sign(x[across_x]) * u[across_x, 1]) / hx
              + np.mean(np.sign(y[across_y]) * u[across_y, 0]) / hy)
     return float(np.degrees(shear))
+
+
+def punch_reach(reference: np.ndarray, final: np.ndarray, g: DrapeGeometry, travel: float,
+                zone_radius_m: float) -> dict:
+    """How far out the fabric that touches the punch at the end started [m], against the
+    radius of the zone of beads given punch contact (``zone_radius_m``): a bead from
+    beyond the zone would pass through the punch, so ``zone_holds`` must be true.
+
+    Touching: centre within R + 0.75 d of the punch centre at its final ``travel`` [m].
+    """
+    centre = np.array([0.0, 0.0, g.punch_z_m - travel])
+    touching = np.linalg.norm(final - centre, axis=1) < g.radius_m + 0.75 * g.diameter_m
+    r0 = np.hypot(reference[:, 0], reference[:, 1])
+    furthest = float(r0[touching].max()) if touching.any() else None
+    return {"punch_zone_radius_m": zone_radius_m,
+            "furthest_touching_start_radius_m": furthest,
+            "touching_beads": int(touching.sum()),
+            "zone_holds": furthest is None or furthest <= zone_radius_m,
+            "note": "start radius of the furthest bead touching the punch at the end "
+                    "(centre within R + 0.75 d of the punch centre) against the radius of "
+                    "the beads given punch contact"}

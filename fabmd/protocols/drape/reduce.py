@@ -20,7 +20,7 @@ from ..common import overlap_summary
 from ..driven import DrivenResult, Outputs, kinetic_to_work_ratio, read_outputs, started_mask
 from .geometry import DrapeGeometry, tool_geometry
 from .input import CLAMP_OVERLAP_FILE
-from .measures import draw_in, shear_grid, wrinkling
+from .measures import draw_in, punch_reach, shear_grid, wrinkling
 from .report import plot_specs, write_final
 
 if TYPE_CHECKING:
@@ -264,7 +264,11 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
         "shear_angle": shear,
         "wrinkling": wrinkling(ref, cur, g, float(travel[-1])),
         "draw_in": draw_in(ref, cur, g),
-        "punch_reach": test.reach(g),
+        # the punch's reach against its contact zone; the zone radii under their own key
+        # (punch_reach held the radii alone from the tool_zones switch to stop 16)
+        "punch_reach": punch_reach(ref, cur, g, float(travel[-1]),
+                                   test.reach(g)["punch_reach"]),
+        "tool_zone_radii_m": test.reach(g),
         "max_kinetic_to_external_work": kinetic_to_work_ratio(out, started),
         "inertia": inertia,
         "mean_inertial_to_punch_force": ratio,

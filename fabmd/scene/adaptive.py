@@ -1,0 +1,199 @@
+"""Adaptive quasi-static loading: the boundary speed follows the quasi-static measures.
+
+A driven test at a fixed speed spends most of its steps where the fabric is quiet. With
+``AdaptiveLoading(adaptive=True)`` the speed of the driven boundary becomes
+``v = v0 · ramp(t) · f``: ``v0`` the plan's (base) speed and smooth start, ``f`` a factor
+in [1, ``max_speed_factor``] that LAMMPS itself adjusts, so the run folder stays runnable
+with plain ``mpirun -np N lmp -in`` (no Python between chunks, no ``jump`` loop):
+
+* every control interval (``control_interval`` output intervals) ``fix ave/time`` averages
+  the power the boundary puts in, the drag's power and the kinetic power of the free beads
+  (d KE/dt), so the measures of the per-interval verdict
+  (:data:`fabmd.scene.quasi_static.INTERVAL_LIMITS`) are known for the interval just run:
+  the drag's share and the kinetic energy's share of the work, and KE/U;
+* ``busy`` is the largest of them over its limit; an integral controller (``fix
+  controller``) moves ln f by ``-gain·ln(busy/target)`` each interval: faster while
+  ``busy`` is under ``target``, slower above it; held during the smooth start, and the
+  part of ln f outside [0, ln max_speed_factor] is taken back at once (no wind-up);
+* the factor applied follows the controller's with a first-order lag of one control
+  interval (a second ``fix controller`` every step), so the speed never jumps: a speed
+  jump sends a stress wave through the coupon;
+* the boundary moves by integrating the speed (``fix move variable NULL ... v_v``); its
+  displacement is read back from the clamps' centres of mass, and a ``fix halt`` ends the
+  run on the first output step at or past the travel.
+
+The plan (:func:`adaptive_plan`) keeps the fixed-speed plan's time step, drag, base speed
+and smooth start (a start 8 times shorter moved the tension toe forces by 4-12 %: the toe
+is rate-sensitive), takes an output interval ``max_speed_factor`` times shorter (about
+``samples`` curve points even at full speed; the curve's forces are then averaged over the
+fixed run's interval travel, :func:`window_mean`, so that it is as smooth) and runs at most
+the fixed run's steps.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import inputs
+from ..errors import InputError
+from .plan import RunPlan
+from .quasi_static import INTERVAL_LIMITS
+from .templates import render
+
+#: largest boundary speed over the fibres' wave speed any driven test may reach (the limit
+#: of ``speed_fraction``)
+MAX_SPEED_FRACTION = 0.05
+
+
+@dataclass(frozen=True)
+class AdaptiveLoading:
+    """Opt-in adaptive loading speed (see the module docstring).
+
+    Args:
+        adaptive: adapt the speed (default False: the fixed speed of ``speed_fraction``).
+        max_speed_factor: the fastest speed over the base speed (``speed_fraction``), in
+            [1, 100]; ``speed_fraction`` × it may not exceed 0.05 of the wave speed.
+        target: the measures are kept at this fraction of the per-interval verdict's
+            limits, in (0, 1].
+        gain: change of ln(speed factor) per control interval per unit of
+            ln(measure / target), in (0, 1].
+        control_interval: fewest output intervals per control interval (>= 1).
+        control_transits: fewest axial wave transits of the specimen per control interval
+            (>= 1): the measures of a shorter one answer the controller's own last
+            speed change (a control interval under one transit made the picture-frame
+            speed oscillate between 1x and 2x and moved its forces by 10-60 %).
+    """
+
+    adaptive: bool = False
+    max_speed_factor: float = 8.0
+    target: float = 0.25
+    gain: float = 0.5
+    control_interval: int = 4
+    control_transits: float = 5.0
+
+    def __post_init__(self):
+        if not isinstance(self.adaptive, bool):
+            raise InputError(f"loading_speed.adaptive must be true or false, got "
+                             f"{self.adaptive!r}")
+        inputs.in_range("loading_speed.max_speed_factor", self.max_speed_factor, 1.0, 100.0)
+        inputs.in_range("loading_speed.target", self.target, 0.0, 1.0, low_open=True)
+        inputs.in_range("loading_speed.gain", self.gain, 0.0, 1.0, low_open=True)
+        inputs.positive_int("loading_speed.control_interval", self.control_interval)
+        inputs.in_range("loading_speed.control_transits", self.control_transits, 1.0, 1000.0)
+
+    def check_speed(self, section: str, speed_fraction: float) -> None:
+        """The fastest speed stays within :data:`MAX_SPEED_FRACTION` of the wave speed."""
+        if self.adaptive and speed_fraction * self.max_speed_factor > MAX_SPEED_FRACTION \
+                * (1 + 1e-12):
+            raise InputError(
+                f"{section}.loading_speed.max_speed_factor = {self.max_speed_factor:g} with "
+                f"speed_fraction = {speed_fraction:g} would load at "
+                f"{speed_fraction * self.max_speed_factor:g} of the wave speed; at most "
+                f"{MAX_SPEED_FRACTION:g} (max_speed_factor <= "
+                f"{MAX_SPEED_FRACTION / speed_fraction:g})")
+
+
+def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float,
+                  transit_s: float = 0.0) -> RunPlan:
+    """The fixed-speed ``plan`` made adaptive (see the module docstring); unchanged when
+    ``loading`` is not adaptive. ``transit_s``: the axial wave transit time of the
+    specimen [s] (its length over the fibres' wave speed). ``extra`` keeps the fixed run's
+    steps and output interval, the travel and the control settings."""
+    if not loading.adaptive:
+        return plan
+    k = loading.max_speed_factor
+    every = max(1, int(plan.every // k))
+    steps = every * math.ceil(plan.steps / every)
+    transits = math.ceil(loading.control_transits * transit_s / (every * plan.time_step_s)
+                         - 1e-9)  # not one more for a rounding error
+    extra = {**plan.extra, "adaptive": True, "max_speed_factor": k,
+             "target": loading.target, "gain": loading.gain,
+             "control_interval_steps": every * max(loading.control_interval, transits),
+             "transit_s": transit_s,
+             "travel_m": travel_m, "fixed_speed_steps": plan.steps,
+             "fixed_speed_every": plan.every}
+    return dataclasses.replace(plan, every=every, steps=steps, extra=extra)
+
+
+def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
+                   power_floor_w: float, displacement: str = "u") -> str:
+    """The LAMMPS text of the adaptive speed (``lammps_templates/adaptive_speed.lmp``):
+    it defines ``v_adapt_factor`` (the speed factor) and the halt at the travel; put it
+    after the driven outputs (it reads ``external_ref``, ``c_p_damp``, ``c_ke_free``,
+    ``v_ebond``) and make the protocol's speed ``base formula * v_adapt_factor``, its
+    displacement ``v_u`` (read back from the boundary) and its time ``v_t``.
+
+    Args:
+        energy_floor_j: strain energy below which KE/U is taken against this floor (a
+            slack fabric has almost none).
+        power_floor_w: boundary power below which the work shares are taken against it.
+        displacement: the variable (without ``v_``) of the boundary's travel [m].
+    """
+    x = plan.extra
+    interval = x["control_interval_steps"]
+    gain = x["gain"]
+    return render("adaptive_speed", interval=interval, every=plan.every,
+                  ln_max=math.log(x["max_speed_factor"]), max_factor=x["max_speed_factor"],
+                  external_ref=external_ref, power_floor=power_floor_w,
+                  energy_floor=energy_floor_j,
+                  damping_limit=INTERVAL_LIMITS["damping_share"],
+                  inertia_limit=INTERVAL_LIMITS["inertia_share"],
+                  kinetic_limit=INTERVAL_LIMITS["kinetic_to_strain_energy"],
+                  target=x["target"], ramp_time=plan.ramp_time_s, gain=gain,
+                  alpha=gain / (interval * plan.time_step_s),
+                  lag_alpha=1.0 / (interval * plan.time_step_s), travel=x["travel_m"],
+                  displacement=displacement)
+
+
+def adaptive_summary(plan: RunPlan, steps, time_s, speed_m_s) -> dict:
+    """What an adaptive run did (``{}`` for a fixed-speed one): the loading steps it took
+    against the fixed-speed run's and its speed over the base speed (``steps``,
+    ``time_s``, ``speed_m_s``: the curve's samples)."""
+    if not plan.extra.get("adaptive"):
+        return {}
+    taken = int(steps[-1] - steps[0])
+    factor = np.asarray(speed_m_s, float) / plan.speed_m_s
+    after = np.asarray(time_s, float) > plan.ramp_time_s
+    return {"adaptive_loading": {
+        "steps": taken, "fixed_speed_steps": plan.extra["fixed_speed_steps"],
+        "step_ratio": plan.extra["fixed_speed_steps"] / max(taken, 1),
+        "max_speed_factor": float(factor.max()),
+        "mean_speed_factor_after_start": float(factor[after].mean()) if after.any() else None,
+        "allowed_speed_factor": plan.extra["max_speed_factor"],
+        "note": "speed factor: boundary speed over the base speed (speed_fraction x wave "
+                "speed); steps: of the loading, the fixed-speed run's from its plan"}}
+
+
+def window_width_m(plan: RunPlan) -> float | None:
+    """Travel of the driven boundary over one output interval of the fixed-speed run [m]
+    (None for a fixed-speed plan): an adaptive run's interval means are averaged over it
+    (:func:`window_mean`), so that its curve is as smooth as the fixed run's."""
+    x = plan.extra
+    if not x.get("adaptive"):
+        return None
+    return x["travel_m"] * x["fixed_speed_every"] / x["fixed_speed_steps"]
+
+
+def window_mean(displacement, values, width: float) -> np.ndarray:
+    """Each sample's mean of ``values`` over the travel ``width`` before it.
+
+    ``values[i]`` is the mean over the interval that ends at sample ``i`` (from sample
+    ``i-1``: the interval means of ``means.dat``), so the integral of the values over the
+    travel is piecewise linear in it; each sample gets that integral over
+    [d_i - width, d_i] divided by the travel it spans (less at the start).
+    """
+    d = np.asarray(displacement, float)
+    y = np.asarray(values, float)
+    step = np.diff(d, prepend=d[0])
+    integral = np.cumsum(y * step)
+    start = np.maximum(d - width, d[0])
+    span = d - start
+    inside = np.interp(start, d, integral)
+    out = y.copy()
+    moving = span > 0
+    out[moving] = (integral[moving] - inside[moving]) / span[moving]
+    return out
