@@ -39,14 +39,18 @@ def beads_for(spacing_ratio: float, length: float):
     return bead_parameters(FIBRE, Discretisation(spacing_ratio), bond_length_m=length / n), n
 
 
-def chains(axes, types, spacing_ratio: float, box_lo, box_hi, periodic=(True, True, True)):
-    """Periodic fibres along x (length 2 d) in register, one per (y, z) in ``axes``."""
+def chains(axes, types, spacing_ratio: float, box_lo, box_hi, periodic=(True, True, True),
+           registers=None):
+    """Periodic fibres along x (length 2 d), one per (y, z) in ``axes``; ``registers``: each
+    fibre's bead offset along x as a fraction of l0 (default 0: all in register)."""
     length = 2 * D
     b, n = beads_for(spacing_ratio, length)
-    x = b.bond_length_m * np.arange(n)
-    pos = np.vstack([np.column_stack([x, np.full(n, y), np.full(n, z)]) for y, z in axes])
-    ring = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
     k = len(axes)
+    shifts = np.zeros(k) if registers is None else np.asarray(registers, float)
+    pos = np.vstack([np.column_stack([b.bond_length_m * (np.arange(n) + u), np.full(n, y),
+                                      np.full(n, z)]) for (y, z), u in zip(axes, shifts,
+                                                                           strict=True)])
+    ring = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
     model = BeadModel(positions=pos, diameters=D, masses=b.mass_kg,
                       atom_types=np.repeat(np.asarray(types), n),
                       fibre_ids=np.repeat(np.arange(1, k + 1), n),
@@ -60,18 +64,40 @@ def chains(axes, types, spacing_ratio: float, box_lo, box_hi, periodic=(True, Tr
     return model, b
 
 
+#: rows × columns of the hexagonal bundle; its fibres sit at random registers, as in a yarn
+HEX_SIDE = 8
+
+
 def hex_bundle(g: float, spacing_ratio: float = 0.5):
-    """Four fibres in a periodic hexagonal lattice of axis spacing g (six neighbours each)."""
+    """A periodic hexagonal lattice of 8 × 8 fibres at axis spacing g (six neighbours each),
+    every fibre at its own register (a fixed random permutation of 64 offsets)."""
     h = math.sqrt(3) / 2 * g
-    axes = [(0.0, 0.0), (g, 0.0), (0.5 * g, h), (1.5 * g, h)]
-    return chains(axes, (1, 1, 1, 1), spacing_ratio, (-0.25 * g, -0.25 * h),
-                  (1.75 * g, 1.75 * h))
+    axes = [(i * g + 0.5 * g * (j % 2), j * h) for j in range(HEX_SIDE) for i in range(HEX_SIDE)]
+    registers = np.random.default_rng(0).permutation(HEX_SIDE**2) / HEX_SIDE**2
+    return chains(axes, (1,) * len(axes), spacing_ratio, (-0.25 * g, -0.5 * h),
+                  ((HEX_SIDE - 0.25) * g, (HEX_SIDE - 0.5) * h), registers=registers)
 
 
 def pair_of_fibres(r: float, spacing_ratio: float, types=(1, 1)):
     """Two parallel fibres with axes ``r`` apart along y (periodic in x only)."""
     return chains([(0.0, 0.0), (r, 0.0)], types, spacing_ratio, (-2 * D, -2 * D),
                   (2 * D + r, 2 * D), periodic=(True, False, False))
+
+
+#: registers of the fibre pairs whose mean is the force per length of two parallel fibres
+PAIR_REGISTERS = np.arange(16) / 16
+
+
+def pairs_in_registers(r: float, spacing_ratio: float):
+    """16 pairs of parallel fibres ``r`` apart along y, stacked 3 d apart in z: the second
+    fibre of pair j (molecule 2j + 2) sits at register j/16 of the first."""
+    axes, registers = [], []
+    for j, u in enumerate(PAIR_REGISTERS):
+        axes += [(0.0, 3 * D * j), (r, 3 * D * j)]
+        registers += [0.0, u]
+    top = 3 * D * len(PAIR_REGISTERS)
+    return chains(axes, (1,) * len(axes), spacing_ratio, (-2 * D, -2 * D), (2 * D + r, top),
+                  periodic=(True, False, False), registers=registers)
 
 
 def probe(tmp_path, name, model, contact, b, measure: list[str], engine=None):
@@ -95,22 +121,23 @@ FORCE = ["group           second molecule 2",
          "compute         fy second reduce sum fy",
          "compute         epair all pe pair",
          "fix             out all ave/time 1 1 1 c_fy c_epair file out.txt format ' %.15g'"]
+# the same over the second fibres of every pair (pairs_in_registers)
+FORCE_PAIRS = [FORCE[0].replace("molecule 2", f"molecule 2:{2 * len(PAIR_REGISTERS)}:2"),
+               *FORCE[1:]]
 
 
 def test_law_contact_is_checked_and_rendered():
     b, _ = beads_for(0.5, 2 * D)
     c = law_contact()
     assert c.split and c.pair_style() == "hybrid/overlay"
-    # the linear part is the law's tangent where the fibres touch: 2n·k·E·Vf_t^n/√3
-    k = GLASS_BUNDLE.coefficient * GLASS_BUNDLE.modulus_pa
-    tangent = 6 * k * LAW.touching_vf**3 / math.sqrt(3)
-    assert LAW.linear_stiffness_pa() == pytest.approx(tangent, rel=1e-3)
-    assert c.within_family_stiffness_n_per_m([b]) == pytest.approx(
-        LAW.linear_stiffness_pa() * b.bond_length_m)
-    # the time step: the table's steepest part, just inside the core where the second
-    # neighbours' share is taken off, 1.48× the crossing's k_n (the core itself: 1×)
+    # the linear part: the steepest line under the pair force down to the core (per pair)
     kn_cross = default_stiffness_pa([b]) * b.bond_length_m
-    assert c.stability_stiffness_n_per_m([b]) == pytest.approx(1.48 * kn_cross, rel=0.01)
+    k_lin = c.within_family_stiffness_n_per_m([b])
+    r = np.linspace(LAW.core_spacing_m(kn_cross / b.bond_length_m), D, 500)[:-1]
+    under = LAW.pair_force_n(r, b.bond_length_m, kn_cross / b.bond_length_m) - k_lin * (D - r)
+    assert under.min() == pytest.approx(0.0, abs=1e-6 * k_lin * D) and under.max() > 0
+    # the time step: the pair's steepest tangent, the core's k_n plus the law's own (1.05×)
+    assert c.stability_stiffness_n_per_m([b]) == pytest.approx(1.05 * kn_cross, rel=0.01)
     with pytest.raises(InputError, match="not both"):
         ContactModel(within_family_law=LAW, within_family_stiffness_pa=1e5)
     with pytest.raises(InputError, match="hooke"):
@@ -130,9 +157,11 @@ def test_law_contact_is_checked_and_rendered():
     # the energy column is the integral of the force column (LAMMPS checks it too)
     rows = np.array([ln.split() for ln in table.splitlines()[5:]], float)
     r, e, f = rows[:, 1], rows[:, 2], rows[:, 3]
-    assert np.all(f >= 0) and f[-1] == 0 and e[-1] == 0
+    assert np.all(f >= -1e-9 * f.max()) and f[-1] == 0 and e[-1] == 0
     close = np.isclose(-np.gradient(e, r), f, rtol=1e-3, atol=1e-9)
-    assert close.mean() > 0.998  # all but the rows at the two kinks (core, next neighbour)
+    # all but a few rows at the core's kink and where the fibres touch (the register-
+    # averaged force starts as sqrt(d − r) there, ~1e-7 of the table's largest force)
+    assert close.mean() > 0.997
 
 
 def test_the_contact_follows_the_law_and_has_a_hard_core():
@@ -175,39 +204,62 @@ def test_the_contact_follows_the_law_and_has_a_hard_core():
 @pytest.mark.parametrize("pressure", [1e4, 1e5, 3e5])
 def test_a_hexagonal_bundle_compacts_as_the_law(tmp_path, pressure):
     """(a) A periodic hexagonal bundle of one family at the spacing where the law gives
-    ``pressure``: LAMMPS's virial pressure is that pressure, and the Vf it implies is the
+    ``pressure``: LAMMPS's virial pressure is that pressure (1 %; 1.5 % at 10 kPa, where
+    64 random registers sample the bumpiest overlaps), and the Vf it implies is the
     bundle's (2 %). The law realised is shifted to 0 where the virtual fibres touch (Vf
     0.351 > the law's 0.30): Vf = law(p + p(Vf_touch))."""
     g = LAW.spacing_at(pressure)
     model, b = hex_bundle(g)
     pyy, pzz = probe(tmp_path, "bundle", model, law_contact(), b, PRESSURE)
     for p in (pyy, pzz):
-        assert p == pytest.approx(pressure, rel=0.01)
+        assert p == pytest.approx(pressure, rel=0.015 if pressure < 5e4 else 0.01)
         assert LAW.volume_fraction(p) == pytest.approx(LAW.vf_at(g), rel=0.02)
+
+
+def test_the_pair_force_scales_with_the_bead_spacing_squared():
+    """F = l0²·f(ρ): the mean force per length over register is the law at every overlap
+    for either spacing (64 registers, Python sums), with the bumpiness of one register
+    shrinking as the overlap grows (module docstring's numbers)."""
+    k_cross = default_stiffness_pa([beads_for(0.5, 2 * D)[0]])
+    rho = np.linspace(0.65, 0.999, 50) * D
+    assert LAW.pair_force_n(rho, 0.25 * D, k_cross) == pytest.approx(
+        LAW.pair_force_n(rho, 0.5 * D, k_cross) / 4, rel=1e-12)
+    for delta in (0.03, 0.1, 0.2, 0.33):
+        h = (1 - delta) * D
+        q = LAW.line_force_n_per_m(h, k_cross)
+        for ratio in (0.5, 0.25):
+            assert LAW.mean_line_force_n_per_m(h, ratio * D, k_cross) == pytest.approx(
+                q, rel=0.005)
+    h = 0.8 * D
+    one = [LAW.mean_line_force_n_per_m(h, 0.5 * D, k_cross, register=u) for u in (0, 0.5)]
+    assert 0.02 < abs(one[0] - one[1]) / LAW.line_force_n_per_m(h, k_cross) < 0.1
 
 
 @pytest.mark.lammps
 def test_two_parallel_fibres_carry_the_law_per_unit_length_at_either_spacing(tmp_path):
-    """(b) Two parallel fibres in register: the same force per unit length at s/d 0.5 and
-    0.25 (≤ 2 %) where only partner beads touch (δ = 0.03 d: 7 % of it is the law's
-    nonlinear excess); deeper, the s/d 0.5 chain still follows the law (the table is solved
-    for its second neighbours), the 0.25 chain is stiffer (known limit: its next neighbours
-    add force; bundle_contact.pair_force_n)."""
+    """(b) Two parallel fibres pressed together, averaged over 16 registers: the law's force
+    per unit length (≤ 2 %) at s/d 0.5 and 0.25 alike, from barely touching (δ = 0.03 d)
+    to near the packing limit (0.33 d, about 300 kPa); one register alone carries what
+    :meth:`BundleContact.mean_line_force_n_per_m` predicts for it (the bumpiness)."""
     k_cross = default_stiffness_pa([beads_for(0.5, 2 * D)[0]])
     per_length = {}
-    for delta in (0.03, 0.2):
+    for delta in (0.03, 0.2, 0.33):
         r = (1 - delta) * D
         q_law = LAW.line_force_n_per_m(r, k_cross)
         for ratio in (0.5, 0.25):
-            model, b = pair_of_fibres(r, ratio)
-            fy, _ = probe(tmp_path, f"pair_{delta}_{ratio}", model, law_contact(), b, FORCE)
-            per_length[delta, ratio] = fy / (2 * D) / q_law
-    assert LAW.linear_stiffness_pa() * 0.03 * D / LAW.line_force_n_per_m(0.97 * D, k_cross) \
-        < 0.95  # the nonlinear range: the table carries 7 % of the force
-    assert per_length[0.03, 0.5] == pytest.approx(1.0, rel=0.01)
-    assert per_length[0.03, 0.25] == pytest.approx(per_length[0.03, 0.5], rel=0.02)
-    assert per_length[0.2, 0.5] == pytest.approx(1.0, rel=0.01)
-    assert 2.0 < per_length[0.2, 0.25] < 3.2  # measured 2.64 (the known limit above)
+            model, b = pairs_in_registers(r, ratio)
+            fy, _ = probe(tmp_path, f"pairs_{delta}_{ratio}", model, law_contact(), b,
+                          FORCE_PAIRS)
+            per_length[delta, ratio] = fy / (2 * D) / len(PAIR_REGISTERS) / q_law
+    for delta in (0.03, 0.2, 0.33):
+        assert per_length[delta, 0.5] == pytest.approx(1.0, rel=0.02), delta
+        assert per_length[delta, 0.25] == pytest.approx(1.0, rel=0.02), delta
+        assert per_length[delta, 0.25] == pytest.approx(per_length[delta, 0.5], rel=0.02)
+    r = 0.8 * D
+    model, b = pair_of_fibres(r, 0.5)
+    fy, _ = probe(tmp_path, "in_register", model, law_contact(), b, FORCE)
+    assert fy / (2 * D) == pytest.approx(LAW.mean_line_force_n_per_m(
+        r, b.bond_length_m, k_cross, register=0.0), rel=1e-3)
 
 
 @pytest.mark.lammps
@@ -223,8 +275,8 @@ def test_a_crossing_of_two_families_keeps_the_crossing_stiffness(tmp_path):
     assert evdwl == 0.0  # no table energy between families
     same, b1 = pair_of_fibres((1 - delta) * D, 0.5)
     fy1, evdwl1 = probe(tmp_path, "same", same, c, b1, FORCE)
-    assert fy1 / (2 * D) == pytest.approx(LAW.line_force_n_per_m((1 - delta) * D, k_cross),
-                                          rel=0.01)
+    assert fy1 / (2 * D) == pytest.approx(LAW.mean_line_force_n_per_m(
+        (1 - delta) * D, b1.bond_length_m, k_cross, register=0.0), rel=1e-3)
     assert fy1 < 1e-3 * fy and evdwl1 > 0  # the table's (conservative) energy is evdwl
 
 

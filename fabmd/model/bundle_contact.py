@@ -11,28 +11,45 @@ the law gives p(Vf) (:class:`~fabmd.model.compaction.CompactionLaw`), shifted so
     p_s(r) = p(Vf(r)) − p(Vf(d)),
 
 and the line force per unit length between neighbours is q = p_s·r/√3 (the inverse of
-:func:`~fabmd.model.compaction.bundle_pressure_pa`'s virial, p = √3·q/g); a bead pair
-carries F = q·l0. The shift makes the realised law p(Vf) − p(Vf_touch): at a pressure P the
-bundle reaches the law's Vf at P + p(Vf_touch) (:meth:`BundleContact.volume_fraction`).
+:func:`~fabmd.model.compaction.bundle_pressure_pa`'s virial, p = √3·q/g). The shift makes
+the realised law p(Vf) − p(Vf_touch): at a pressure P the bundle reaches the law's Vf at
+P + p(Vf_touch) (:meth:`BundleContact.volume_fraction`).
+
+From line force to bead pairs (register average). Two parallel bead chains at axis
+distance h touch through every pair closer than d, so the force per length depends on
+their register (how one chain's beads sit along the other's). Fibres in a yarn have no
+register to keep, so the pair force F(ρ) is chosen so that the *average over register*
+is q(h) at every h:
+
+    q(h) = (2h/l0²) · ∫_h^d F(ρ)/sqrt(ρ² − h²) dρ,
+
+an Abel transform, inverted once on a grid (:func:`_unit_pair_force`): F = l0²·f(ρ) with
+f independent of the bead spacing l0, so refining the beads changes the resolution, not
+the mean force per length (tests: two fibres at s/d 0.5 and 0.25, averaged over
+register). One register differs from the mean — the bead chain's bumpiness,
+:meth:`BundleContact.mean_line_force_n_per_m` with ``register``: on the glass law at s/d
+0.5 from 0–1.36× at δ = 0.03 d (half-offset chains do not touch yet) to 0.96–1.03× at
+0.2 d; at s/d 0.25 0.68–1.12× and 0.97–1.02×. (Matching one register exactly instead —
+this module's first form — needs a recursion over the second, third … neighbours that
+oscillates for fine chains: at s/d 0.25 and δ = 0.2 d that form carried 2.6× the law.)
 
 Packing limit. The van Wyk form stays finite at the densest packing of circular filaments
 (Vf = π/(2√3), :data:`~fabmd.model.compaction.PACKING_LIMIT`); a bundle cannot pack denser.
 So past the spacing where the bundle reaches it — or, if that comes first, where the law's
-tangent reaches the crossing contact's stiffness k'_cross — the force goes on linearly with
-slope k'_cross: a hard core as stiff as a crossing. The stable time step
-(:mod:`fabmd.model.timestep`) takes the bead pair's steepest tangent: the crossing's k_n in
-the core, up to 1.5× it just inside the core at s/d 0.5, where the table takes the second
-neighbours' share off (:meth:`BundleContact.pair_force_n`): 3 % shorter on the plain-weave
-example, where the bonds bound the step too.
+tangent reaches the crossing contact's stiffness k'_cross — each pair adds a hard core
+k'_cross·l0·(r_core − r), as stiff as a crossing (per pair, so bumpy like a crossing);
+the law's line force is continued past r_core with its own slope there before the
+inversion, so the inverted force keeps a finite tangent. The stable time step
+(:mod:`fabmd.model.timestep`) takes the pair's steepest tangent: the core's plus the law's
+(about 1.05× the crossing's k_n on the glass law).
 
 LAMMPS realisation (``pair_style hybrid/overlay granular table linear N``): ``granular``
 keeps its per-type-pair Hooke coefficients (crossings stiff; same family a linear part
-k_lin·l0·(d − r), so that friction and damping act there), and a ``table`` on the
-same-family type pairs adds the excess F − k_lin·l0·(d − r) (:meth:`BundleContact.table_text`,
-a file in the run folder). k_lin is the largest line under the law (its tangent where the
-fibres touch: the law is convex in the overlap), so the total is the law at every overlap.
-Known limit: friction within a family is μ × the granular (linear) part only — about half
-the normal force at 100 kPa for the glass law, less at higher pressure.
+k_n,lin·(d − r), so that friction and damping act there), and a ``table`` on the
+same-family type pairs adds the excess F − k_n,lin·(d − r) (:meth:`BundleContact.table_text`,
+a file in the run folder). k_n,lin is the steepest line under F down to the core
+(:meth:`BundleContact.linear_pair_stiffness_n_per_m`), so the total is F at every overlap.
+Known limit: friction within a family is μ × the granular (linear) part only.
 """
 
 from __future__ import annotations
@@ -128,17 +145,6 @@ class BundleContact:
         return np.where(loaded, (2 * n * k * vf**n - self._law_pressure(r)) / SQRT3, 0.0)
 
     # -- the contact ----------------------------------------------------------------------
-    def linear_stiffness_pa(self) -> float:
-        """k_lin [Pa]: the largest line k·(d − r) under the law's line force (its tangent
-        where the fibres touch); floored at :data:`MIN_LINEAR_SHARE` of the law's first
-        tangent when the law starts only past touching (Vf_touch < Vf0)."""
-        d = self.diameter_m
-        r = np.linspace(self.packing_spacing_m, d, 2001)[:-1]
-        line = self._law_pressure(r) * r / SQRT3 / (d - r)
-        first = 2 * self.law.exponent * self.law.coefficient * self.law.modulus_pa \
-            * max(self.touching_vf, self.law.vf0) ** self.law.exponent / SQRT3
-        return max(float(line.min()), MIN_LINEAR_SHARE * first)
-
     def core_spacing_m(self, crossing_stiffness_pa: float) -> float:
         """Spacing r_core [m] below which the force goes on linearly with slope
         ``crossing_stiffness_pa`` k'_cross [Pa]: the packing limit, or where the law's
@@ -168,66 +174,127 @@ class BundleContact:
         q = np.where(r < self.diameter_m, q, 0.0)
         return float(q) if q.ndim == 0 else q
 
-    def pair_force_n(self, spacing_m: np.ndarray, bond_length_m: float,
-                     crossing_stiffness_pa: float) -> np.ndarray:
-        """Normal force of one bead pair [N] at centre distance ``spacing_m`` (ascending
-        array ending at d) such that two parallel chains *in register* carry the line force
-        q per unit length (:meth:`line_force_n_per_m`).
+    def _line_force_for_inversion(self, r: np.ndarray, crossing_stiffness_pa: float):
+        """The line force the pair force is inverted from [N/m]: the law down to the core
+        spacing, then continued with the law's own slope there (C¹, so the inverted pair
+        force keeps a finite tangent; the core's stiffness is added per pair)."""
+        rc = self.core_spacing_m(crossing_stiffness_pa)
+        slope = float(self._law_slope(np.array(rc)))
+        q_core = float(self._law_pressure(np.array(rc)) * rc / SQRT3)
+        law = self._law_pressure(np.maximum(r, rc)) * np.maximum(r, rc) / SQRT3
+        q = np.where(r > rc, law, q_core + slope * (rc - r))
+        return np.where(r < self.diameter_m, q, 0.0)
 
-        In register, a bead touches its partner at r and, past δ/d = 1 − sqrt(1 − (l0/d)²),
-        also the partner's neighbours at ρ = sqrt(r² + l0²); so F(r) = l0·q(r) −
-        2·F(ρ)·r/ρ, solved from r = d inwards (ρ > r is known). Exact while the next
-        neighbours (2·l0 along) cannot touch above the core spacing r_core (r_core² + 4·l0² ≥
-        d²: s/d ≳ 0.4 for the glass law's core at 0.62 d). Finer chains take F = l0·q: the
-        same recursion over several neighbours is unstable there (it oscillates and turns
-        negative), so past δ/d = 1 − sqrt(1 − (l0/d)²) they are stiffer than the law
-        (3.2 % of d at s/d = 0.25) — the limit the linear contact has too.
+    def pair_force_n(self, spacing_m, bond_length_m: float,
+                     crossing_stiffness_pa: float):
+        """Normal force of one bead pair [N] at centre distance ``spacing_m`` [m] (array or
+        float), bead spacing ``bond_length_m`` l0: two parallel chains carry the law's line
+        force q per unit length *on average over their register* (module docstring), plus
+        the hard core k'_cross·l0·(r_core − r) inside the core spacing.
+
+        The register average of a pair force F over a chain of spacing l0 at axis distance
+        h is q̄(h) = (2h/l0²)·∫_h^d F(ρ)/sqrt(ρ² − h²) dρ — an Abel transform, so
+        F = l0²·f(ρ) with f independent of l0 (:func:`_unit_pair_force`): bead spacing
+        changes the resolution, not the mean force per length.
         """
         r = np.asarray(spacing_m, float)
-        l0 = bond_length_m
-        target = l0 * self.line_force_n_per_m(r, crossing_stiffness_pa)
+        l0 = inputs.positive("bond_length_m", bond_length_m)
+        grid, unit = _unit_pair_force(self, crossing_stiffness_pa)
         core = self.core_spacing_m(crossing_stiffness_pa)
-        if core**2 + 4 * l0**2 < self.diameter_m**2:
-            return target
-        force = target.copy()
-        rho = np.hypot(r, l0)
-        touching = np.nonzero(rho < self.diameter_m)[0]
-        for i in touching[::-1]:  # from the largest r inwards: F(rho) is known already
-            force[i] = target[i] - 2.0 * np.interp(rho[i], r, force) * r[i] / rho[i]
-        return force
+        force = l0**2 * np.interp(r, grid, unit, right=0.0) \
+            + crossing_stiffness_pa * l0 * np.maximum(0.0, core - r)
+        return float(force) if force.ndim == 0 else force
+
+    def mean_line_force_n_per_m(self, spacing_m: float, bond_length_m: float,
+                                crossing_stiffness_pa: float, register: float | None = None,
+                                offsets: int = 64) -> float:
+        """Force per unit length [N/m] between two parallel bead chains at axis distance
+        ``spacing_m``: averaged over ``offsets`` registers, or at one ``register`` (the
+        offset of one chain's beads along the other, as a fraction of l0): the in-register
+        spread is the bead chain's bumpiness."""
+        l0 = bond_length_m
+        shifts = (np.arange(offsets) / offsets if register is None
+                  else np.array([register])) * l0
+        k = np.arange(-math.ceil(self.diameter_m / l0) - 1, math.ceil(self.diameter_m / l0) + 2)
+        x = k[None, :] * l0 + shifts[:, None]
+        rho = np.hypot(spacing_m, x)
+        force = self.pair_force_n(rho, l0, crossing_stiffness_pa)
+        return float(np.mean(np.sum(force * spacing_m / rho, axis=1)) / l0)
+
+    def linear_pair_stiffness_n_per_m(self, bond_length_m: float,
+                                      crossing_stiffness_pa: float) -> float:
+        """k_n of the granular (linear) part of one bead pair [N/m]: the steepest line
+        k·(d − r) under the pair force down to the core (friction and damping act on it);
+        floored at :data:`MIN_LINEAR_SHARE` of the pair force's mean slope over the law's
+        range when the law starts only past touching (Vf_touch < Vf0)."""
+        d = self.diameter_m
+        core = self.core_spacing_m(crossing_stiffness_pa)
+        r = np.linspace(core, d, 2001)[:-1]
+        ratio = self.pair_force_n(r, bond_length_m, crossing_stiffness_pa) / (d - r)
+        return max(float(ratio.min()), MIN_LINEAR_SHARE * float(ratio[0]))
+
+    def linear_stiffness_pa(self, bond_length_m: float, crossing_stiffness_pa: float) -> float:
+        """The linear part per unit length of bead spacing [Pa]:
+        :meth:`linear_pair_stiffness_n_per_m` / l0 (it grows with l0: the pair force
+        scales as l0²)."""
+        return self.linear_pair_stiffness_n_per_m(bond_length_m, crossing_stiffness_pa) \
+            / bond_length_m
 
     def max_pair_stiffness_n_per_m(self, bond_length_m: float,
                                    crossing_stiffness_pa: float) -> float:
         """Largest tangent stiffness of one bead pair [N/m] (:meth:`pair_force_n`), for the
-        stable time step: k'_cross·l0 in the core, up to 1.6× that just inside it where the
-        second neighbours' share is taken off (glass law, s/d 0.5)."""
-        return _max_pair_stiffness(self, bond_length_m, crossing_stiffness_pa)
+        stable time step: the core's k'_cross·l0 plus the law's own tangent there."""
+        r = np.linspace(TABLE_INNER * self.diameter_m, self.diameter_m, TABLE_POINTS)
+        force = self.pair_force_n(r, bond_length_m, crossing_stiffness_pa)
+        return float(np.max(-np.diff(force) / np.diff(r)))
 
     def table_text(self, bond_length_m: float, crossing_stiffness_pa: float,
                    keyword: str = "WITHIN_FAMILY", points: int = TABLE_POINTS) -> str:
         """LAMMPS ``pair_style table`` section of the excess force per bead pair over the
-        linear part: F − k_lin·l0·(d − r) [N] (F: :meth:`pair_force_n`) and its energy [J],
-        r from :data:`TABLE_INNER`·d to d (``bond_length_m`` = l0)."""
+        linear part: F − k_n,lin·(d − r) [N] (F: :meth:`pair_force_n`; k_n,lin:
+        :meth:`linear_pair_stiffness_n_per_m`) and its energy [J], r from
+        :data:`TABLE_INNER`·d to d (``bond_length_m`` = l0)."""
         l0 = inputs.positive("bond_length_m", bond_length_m)
         d = self.diameter_m
         r = np.linspace(TABLE_INNER * d, d, points)
-        k_lin = self.linear_stiffness_pa()
-        excess = self.pair_force_n(r, l0, crossing_stiffness_pa) - k_lin * l0 * (d - r)
+        k_lin = self.linear_pair_stiffness_n_per_m(l0, crossing_stiffness_pa)
+        excess = self.pair_force_n(r, l0, crossing_stiffness_pa) - k_lin * (d - r)
         excess[-1] = 0.0
         # energy: the integral of the force from r to the cutoff d (trapezoid, fine grid)
         seg = 0.5 * (excess[1:] + excess[:-1]) * np.diff(r)
         energy = np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
-        lines = [f"# fabmd: within-family contact, {self.law.name} law (excess over the "
-                 f"linear part k_lin = {k_lin:.6g} Pa, per bead pair l0 = {l0:.6g} m)",
-                 "", keyword, f"N {points} R {r[0]:.12g} {r[-1]:.12g}", ""]
+        lines = [f"# fabmd: within-family contact, {self.law.name} law, register-averaged "
+                 f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead pair "
+                 f"l0 = {l0:.6g} m)", "", keyword, f"N {points} R {r[0]:.12g} {r[-1]:.12g}", ""]
         lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
                   for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
         return "\n".join(lines) + "\n"
 
 
+#: rows of the grid the pair force is inverted on (r from TABLE_INNER·d to d)
+INVERSION_POINTS = 4000
+
+
 @lru_cache(maxsize=32)
-def _max_pair_stiffness(bundle: BundleContact, bond_length_m: float,
-                        crossing_stiffness_pa: float) -> float:
-    r = np.linspace(TABLE_INNER * bundle.diameter_m, bundle.diameter_m, TABLE_POINTS)
-    force = bundle.pair_force_n(r, bond_length_m, crossing_stiffness_pa)
-    return float(np.max(-np.diff(force) / np.diff(r)))
+def _unit_pair_force(bundle: BundleContact, crossing_stiffness_pa: float):
+    """(r, f) with F = l0²·f: the pair force whose register average is the law's line
+    force, by inverting q̄(h)·l0²/(2h) = ∫_h^d F(ρ)/sqrt(ρ² − h²) dρ on a grid from d
+    inwards (F piecewise linear, each segment's integral in closed form; a triangular
+    solve — stable, unlike matching one register, whose recursion over several neighbours
+    oscillates)."""
+    d = bundle.diameter_m
+    r = np.linspace(TABLE_INNER * d, d, INVERSION_POINTS)
+    target = bundle._line_force_for_inversion(r, crossing_stiffness_pa) / (2.0 * r)
+    f = np.zeros_like(r)
+    for i in range(len(r) - 2, -1, -1):
+        h = r[i]
+        lo, hi = r[i:-1], r[i + 1:]
+        s_lo = np.sqrt(np.maximum(lo * lo - h * h, 0.0))
+        s_hi = np.sqrt(hi * hi - h * h)
+        i0 = np.log((hi + s_hi) / (lo + s_lo))  # ∫ dρ/sqrt(ρ² − h²)
+        i1 = s_hi - s_lo  # ∫ ρ dρ/sqrt(ρ² − h²)
+        w_lo = (hi * i0 - i1) / (hi - lo)  # weights of f at each segment's two ends
+        w_hi = (i1 - lo * i0) / (hi - lo)
+        known = np.dot(w_lo[1:], f[i + 1:-1]) + np.dot(w_hi, f[i + 1:])
+        f[i] = (target[i] - known) / w_lo[0]
+    return r, f

@@ -51,14 +51,16 @@ Measured (``benchmarks/RESULTS.md``, "Split contact"): with the glass law's k' (
 its thickness — crimping the plain-weave example towards 1 cN/tex pushes fibres of one
 yarn through each other (overlap > 0.5 d at −6 %); a linear contact has no packing limit.
 
-Within-family law (``within_family_law``, a :class:`fabmd.model.bundle_contact.BundleContact`):
-same-family pairs follow the compaction law itself up to its packing limit, then a hard
-core as stiff as a crossing — ``pair_style hybrid/overlay granular table``: ``granular``
-carries the law's largest linear part (friction and damping act there; friction within a
-family is μ × that part only, a known limit), a ``table`` on same-family type pairs the
-excess (a file in the run folder, :meth:`ContactModel.table_files`). The energy balance
-is not measured with it (``compute pair/local`` under ``hybrid/overlay`` loses the
-tangential force of overlaid pairs: :mod:`fabmd.scene.energy`).
+Within-family law (``within_family_law``, a
+:class:`fabmd.model.bundle_contact.BundleContact`): same-family pairs follow the compaction
+law itself up to its packing limit (per unit length, averaged over the chains' register, so
+independent of the bead spacing), then a hard core as stiff as a crossing — ``pair_style
+hybrid/overlay granular table``: ``granular`` carries the largest linear part under it
+(friction and damping act there; friction within a family is μ × that part only, a known
+limit), a ``table`` on same-family type pairs the excess (a file in the run folder,
+:meth:`ContactModel.table_files`). The energy balance is not measured with it (``compute
+pair/local`` under ``hybrid/overlay`` loses the tangential force of overlaid pairs:
+:mod:`fabmd.scene.energy`).
 
 Older settings still work and are flagged as discretisation-dependent:
 ``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
@@ -290,9 +292,10 @@ class ContactModel:
         the contact is not split."""
         if not self.split:
             return self.normal_stiffness_n_per_m(beads)
-        k_line = (self.within_family_stiffness_pa if self.within_family_law is None
-                  else self.within_family_law.linear_stiffness_pa())
-        return _normal_stiffness("contact", k_line, None, None, beads)
+        if self.within_family_law is not None:
+            return self.within_family_law.linear_pair_stiffness_n_per_m(
+                max(b.bond_length_m for b in beads), self.crossing_stiffness_pa(beads))
+        return _normal_stiffness("contact", self.within_family_stiffness_pa, None, None, beads)
 
     def crossing_stiffness_pa(self, beads: list[BeadParameters]) -> float:
         """k' of a crossing [Pa] (per unit length; needs the per-length form)."""
