@@ -673,6 +673,7 @@ def parse_not_run(item: str, base: dict) -> tuple[Variant, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    global EXAMPLE  # the example every helper reads (one study per process)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true",
                         help="update section 'Convergence' of benchmarks/RESULTS.md")
@@ -701,9 +702,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--replot", action="store_true", help="no runs: table from the JSON")
     parser.add_argument("--fresh", action="store_true", help="forget the JSON's runs")
     parser.add_argument("--root", type=Path, default=None, help="folder for the runs")
+    parser.add_argument("--scene", default=EXAMPLE,
+                        help=f"shipped example to refine (default {EXAMPLE}); another one "
+                             "has its own JSON and section")
     args = parser.parse_args(argv)
 
+    EXAMPLE = args.scene
     settings_text = " ".join(args.set)
+    if EXAMPLE != "plain_weave.toml":
+        settings_text = " ".join([Path(EXAMPLE).stem, *args.set])
     data = merge(read_example(), parse_settings(args.set))
     data_path = data_path_for(settings_text)
     store = {} if args.fresh or not data_path.exists() else json.loads(data_path.read_text())
@@ -761,6 +768,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.write:
         name = SECTION if not settings_text else f"{SECTION} ({settings_text})"
         command = COMMAND + "".join(f" --set {s}" for s in args.set)
+        if EXAMPLE != "plain_weave.toml":
+            command += f" --scene {EXAMPLE}"
         if base["frame_cells"] != base_levels(read_example())["frame_cells"]:
             command += f" --frame-cells {base['frame_cells']}"
         update_section(name, body, command)
