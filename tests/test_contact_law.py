@@ -40,7 +40,7 @@ def beads_for(spacing_ratio: float, length: float):
 
 
 def chains(axes, types, spacing_ratio: float, box_lo, box_hi, periodic=(True, True, True),
-           registers=None):
+           registers=None, diameter=D):
     """Periodic fibres along x (length 2 d), one per (y, z) in ``axes``; ``registers``: each
     fibre's bead offset along x as a fraction of l0 (default 0: all in register)."""
     length = 2 * D
@@ -51,7 +51,7 @@ def chains(axes, types, spacing_ratio: float, box_lo, box_hi, periodic=(True, Tr
                                       np.full(n, z)]) for (y, z), u in zip(axes, shifts,
                                                                            strict=True)])
     ring = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
-    model = BeadModel(positions=pos, diameters=D, masses=b.mass_kg,
+    model = BeadModel(positions=pos, diameters=diameter, masses=b.mass_kg,
                       atom_types=np.repeat(np.asarray(types), n),
                       fibre_ids=np.repeat(np.arange(1, k + 1), n),
                       bonds=np.vstack([ring + i * n for i in range(k)]), bond_types=1,
@@ -153,6 +153,15 @@ def test_law_contact_is_checked_and_rendered():
     assert f"pair_coeff      1 1 table {WITHIN_FAMILY_TABLE} WITHIN_FAMILY" in text
     table = blocks.contact_files(c, [b])[WITHIN_FAMILY_TABLE]
     assert "\nWITHIN_FAMILY\nN 4000 R " in table
+    # the pair_coeff cutoff is the table's end, digit for digit (a 19-fibre Twintex yarn's
+    # d = 0.000293465655655 m was rounded up past it by 10-digit formatting: LAMMPS stopped)
+    end = table.split("\nN 4000 R ")[1].split("\n")[0].split()[1]
+    assert f"WITHIN_FAMILY {end}\n" in text
+    odd = BundleContact(GLASS_BUNDLE, 0.6 * 0.000293465655655**2, 0.000293465655655)
+    odd_model, _ = chains([(0.0, 0.0)], (1,), 0.5, (-D, -D), (D, D), diameter=odd.diameter_m)
+    odd_text = blocks.contact(odd_model, ContactModel(friction=0.3, within_family_law=odd), [b])
+    odd_end = odd.table_text(b.bond_length_m, 1e9).split(" R ")[1].split("\n")[0].split()[1]
+    assert f"WITHIN_FAMILY {odd_end}\n" in odd_text
     assert blocks.contact_files(ContactModel(), [b]) == {}
     # the energy column is the integral of the force column (LAMMPS checks it too)
     rows = np.array([ln.split() for ln in table.splitlines()[5:]], float)

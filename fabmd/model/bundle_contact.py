@@ -100,6 +100,12 @@ class BundleContact:
                 f"{self.area_m2:.4g} m² touch at Vf {self.touching_vf:.3f}, at or above the "
                 f"packing limit {PACKING_LIMIT:.3f}; use a larger contact diameter")
 
+    @property
+    def cutoff_text(self) -> str:
+        """The table's outer end d as written in the table and its ``pair_coeff`` (the same
+        digits: a cutoff rounded up past the table's end stops LAMMPS)."""
+        return f"{self.diameter_m:.12g}"
+
     # -- the bundle -----------------------------------------------------------------------
     @property
     def touching_vf(self) -> float:
@@ -265,7 +271,8 @@ class BundleContact:
         energy = np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
         lines = [f"# fabmd: within-family contact, {self.law.name} law, register-averaged "
                  f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead pair "
-                 f"l0 = {l0:.6g} m)", "", keyword, f"N {points} R {r[0]:.12g} {r[-1]:.12g}", ""]
+                 f"l0 = {l0:.6g} m)", "", keyword,
+                 f"N {points} R {r[0]:.12g} {self.cutoff_text}", ""]
         lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
                   for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
         return "\n".join(lines) + "\n"

@@ -210,7 +210,8 @@ def _contact_law(model: BeadModel, contact_model: ContactModel, pair_coeffs: lis
             f"contact.within_family_law: needs one bead diameter, the law's "
             f"{law.diameter_m:.6g} m, got {float(model.diameters.min()):.6g}–{d:.6g} m")
     tables = [render_inline("pair_coeff_table_law", i=i, table_file=WITHIN_FAMILY_TABLE,
-                            keyword=WITHIN_FAMILY_KEYWORD, cutoff=fmt(law.diameter_m))
+                            keyword=WITHIN_FAMILY_KEYWORD,
+                            cutoff=law.cutoff_text)
               for i in range(1, len(model.family_names) + 1)]
     return render("contact_granular_law", law=law.law.name, friction=contact_model.friction,
                   table_file=WITHIN_FAMILY_TABLE, points=TABLE_POINTS,
