@@ -153,15 +153,16 @@ def test_law_contact_is_checked_and_rendered():
     assert f"pair_coeff      1 1 table {WITHIN_FAMILY_TABLE} WITHIN_FAMILY" in text
     table = blocks.contact_files(c, [b])[WITHIN_FAMILY_TABLE]
     assert "\nWITHIN_FAMILY\nN 4000 R " in table
-    # the pair_coeff cutoff is the table's end, digit for digit (a 19-fibre Twintex yarn's
-    # d = 0.000293465655655 m was rounded up past it by 10-digit formatting: LAMMPS stopped)
-    end = table.split("\nN 4000 R ")[1].split("\n")[0].split()[1]
-    assert f"WITHIN_FAMILY {end}\n" in text
-    odd = BundleContact(GLASS_BUNDLE, 0.6 * 0.000293465655655**2, 0.000293465655655)
-    odd_model, _ = chains([(0.0, 0.0)], (1,), 0.5, (-D, -D), (D, D), diameter=odd.diameter_m)
-    odd_text = blocks.contact(odd_model, ContactModel(friction=0.3, within_family_law=odd), [b])
-    odd_end = odd.table_text(b.bond_length_m, 1e9).split(" R ")[1].split("\n")[0].split()[1]
-    assert f"WITHIN_FAMILY {odd_end}\n" in odd_text
+    # the pair_coeff cutoff lies just inside the table's end, never past it (a 19-fibre
+    # Twintex yarn's d = 0.000293465655655 m was rounded up past it by 10-digit formatting:
+    # LAMMPS stopped), nor on it (test_the_plain_weave_with_the_law_crimps)
+    for law in (LAW, BundleContact(GLASS_BUNDLE, 0.6 * 0.000293465655655**2,
+                                   0.000293465655655)):
+        m, _ = chains([(0.0, 0.0)], (1,), 0.5, (-D, -D), (D, D), diameter=law.diameter_m)
+        rendered = blocks.contact(m, ContactModel(friction=0.3, within_family_law=law), [b])
+        cutoff = float(rendered.split("WITHIN_FAMILY ")[1].split()[0])
+        end = float(law.table_text(b.bond_length_m, 1e9).split(" R ")[1].split()[1])
+        assert law.diameter_m * (1 - 2e-9) < cutoff < end == pytest.approx(law.diameter_m)
     assert blocks.contact_files(ContactModel(), [b]) == {}
     # the energy column is the integral of the force column (LAMMPS checks it too)
     rows = np.array([ln.split() for ln in table.splitlines()[5:]], float)
@@ -269,6 +270,29 @@ def test_two_parallel_fibres_carry_the_law_per_unit_length_at_either_spacing(tmp
     fy, _ = probe(tmp_path, "in_register", model, law_contact(), b, FORCE)
     assert fy / (2 * D) == pytest.approx(LAW.mean_line_force_n_per_m(
         r, b.bond_length_m, k_cross, register=0.0), rel=1e-3)
+
+
+@pytest.mark.lammps
+@pytest.mark.slow
+def test_the_plain_weave_with_the_law_crimps(tmp_path):
+    """The shipped plain weave's cell with the law, crimped a little (``fabmd crimp``, ~10 s):
+    its fibres are built touching at d to rounding, and with the cutoff on the table's end
+    LAMMPS stopped at the first step ("Pair distance > table outer cutoff", measured)."""
+    from fabmd.examples_dir import example_scene
+
+    from .conftest import run_cli
+
+    text = example_scene("plain_weave.toml").read_text()
+    text = text.replace("[contact]\nfriction = 0.3\n", "[contact]\nfriction = 0.3\n"
+                        'within_family = { law = "glass", form = "law" }\n')
+    text = text.replace("warp = -0.09, weft = -0.09", "warp = -0.02, weft = -0.02")
+    assert 'form = "law"' in text and "-0.02" in text
+    scene = tmp_path / "law.toml"
+    scene.write_text(text)
+    done = run_cli("crimp", str(scene), "--form", "cell", "--out", str(tmp_path / "c"),
+                   "--np", "1", "--quiet")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert (tmp_path / "c" / "within_family.table").exists()
 
 
 @pytest.mark.lammps

@@ -101,10 +101,18 @@ class BundleContact:
                 f"packing limit {PACKING_LIMIT:.3f}; use a larger contact diameter")
 
     @property
-    def cutoff_text(self) -> str:
-        """The table's outer end d as written in the table and its ``pair_coeff`` (the same
-        digits: a cutoff rounded up past the table's end stops LAMMPS)."""
+    def table_end_text(self) -> str:
+        """The table's outer end d as written in the table file."""
         return f"{self.diameter_m:.12g}"
+
+    @property
+    def cutoff_text(self) -> str:
+        """The table's ``pair_coeff`` cutoff: 1e-9 of d inside the table's end. LAMMPS stops
+        on a cutoff past the end ("Pair table cutoff outside of table": a 10-digit d rounded
+        up did, on a 19-fibre Twintex yarn), and on a pair at the cutoff itself, whose
+        table index rounds to the last row ("Pair distance > table outer cutoff": fibres
+        built touching, at d to 1e-16, did). The law's force is 0 there anyway."""
+        return f"{self.diameter_m * (1.0 - 1e-9):.12g}"
 
     # -- the bundle -----------------------------------------------------------------------
     @property
@@ -272,7 +280,7 @@ class BundleContact:
         lines = [f"# fabmd: within-family contact, {self.law.name} law, register-averaged "
                  f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead pair "
                  f"l0 = {l0:.6g} m)", "", keyword,
-                 f"N {points} R {r[0]:.12g} {self.cutoff_text}", ""]
+                 f"N {points} R {r[0]:.12g} {self.table_end_text}", ""]
         lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
                   for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
         return "\n".join(lines) + "\n"
