@@ -121,6 +121,30 @@ def test_any_packing_stays_inside_and_does_not_overlap(n, w, h):
 
 
 # -- fabrics: validation -----------------------------------------------------------------
+@pytest.mark.parametrize("n", [7, 19, 37])
+def test_area_packing_tiles_the_section_and_spans_it(n):
+    """``fibre_packing = "area"``: N hexagonal cells of the contact diameter tile the
+    section's area, and the fibres span a flat yarn (inscribed: 19 fibres span 70 %)."""
+    section = Section(4.2e-3, 0.638e-3)
+    offsets, d = section.packing(n, "area")
+    assert n * math.sqrt(3) / 2 * d * d == pytest.approx(section.area_m2, rel=1e-12)
+    width = np.ptp(offsets[:, 0]) + d
+    height = np.ptp(offsets[:, 1]) + d
+    assert 0.95 < width / section.width_m < 1.12 and 0.9 < height / section.height_m < 1.12
+    gaps = np.linalg.norm(offsets[:, None] - offsets[None], axis=2)[np.triu_indices(n, 1)]
+    assert gaps.min() == pytest.approx(d, rel=1e-9)  # neighbours touch, none overlap
+    inscribed, d_in = section.packing(n)
+    if n == 19:
+        assert (np.ptp(inscribed[:, 0]) + d_in) / section.width_m < 0.71
+    spec = YarnSpec(1870, GLASS, width_m=4.2e-3, height_m=0.638e-3, n_fibres=n,
+                    fibre_packing="area")
+    assert spec.packing()[1] == pytest.approx(d)
+    assert YarnSpec(1870, GLASS, width_m=4.2e-3, height_m=0.638e-3,
+                    n_fibres=n).packing()[1] == pytest.approx(d_in)
+    with pytest.raises(InputError, match="fibre_packing must be one of inscribed, area"):
+        YarnSpec(1870, GLASS, width_m=4.2e-3, n_fibres=n, fibre_packing="dense")
+
+
 def test_impossible_fabrics_are_one_line_errors():
     with pytest.raises(InputError, match="does not fit the warp spacing"):
         Fabric(Weave.plain(), yarn(width="3 mm"), yarn())

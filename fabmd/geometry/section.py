@@ -24,7 +24,21 @@ circle this gives the full hexagonal shells for N = 1, 7, 19, 37, 61, …; a fla
 ellipse gets flat, wide packings (e.g. rows of 4 + 3 for N = 7 at width/height
 = 2). Any N >= 1 works.
 
-Contact diameter d: the lattice is scaled to spacing d, with d the largest value
+Two packing rules (:data:`PACKINGS`, ``[yarns.*] fibre_packing``):
+
+* ``"inscribed"`` (default): the contact diameter below — every fibre inside the section,
+  as large as fits.
+* ``"area"``: the fibres' hexagonal cells tile the section's area, N·(√3/2)·d² = area, so
+  d = sqrt(area/(N·√3/2)), and of the lattice selections above the one whose second
+  moments (of the fibre discs, across and through the thickness) best match the section's
+  is kept. The fibres then span the section (19 fibres in a 4.2 × 0.638 mm ellipse: 4.29 ×
+  0.67 mm, against 2.93 × 0.55 mm inscribed) and poke out a little at thin ends; touching
+  virtual fibres are at the yarn's own fibre volume fraction whatever N is (with the
+  within-family law, :mod:`fabmd.model.bundle_contact`, the law then starts at the same
+  state for every fibre count; inscribed, it starts at Vf 0.58 for 7 and 0.90 for 19
+  fibres of that yarn).
+
+Contact diameter d (``"inscribed"``): the lattice is scaled to spacing d, with d the largest value
 for which every fibre lies inside the section — for an ellipse each fibre centre
 inside the ellipse of semi-axes (w/2 − d/2, h/2 − d/2); for the other shapes each
 fibre centre inside the shape and at least d/2 from its (finely sampled)
@@ -49,6 +63,8 @@ from ..units import quantity
 
 #: section shapes (see the module docstring)
 SHAPES = ("ellipse", "lenticular", "racetrack")
+#: rules that place the virtual fibres in a section (see the module docstring)
+PACKINGS = ("inscribed", "area")
 
 
 @functools.lru_cache(maxsize=64)
@@ -156,11 +172,26 @@ class Section:
         flat = a - b  # racetrack: straight part, then semicircles of radius b
         return np.where(u <= flat, b, np.sqrt(np.clip(b * b - (u - flat) ** 2, 0.0, None)))
 
-    def packing(self, n_fibres: int) -> tuple[np.ndarray, float]:
-        """Fibre centre offsets (n, 2) [m] (across, through-thickness) and contact diameter [m]."""
-        unit, d = _best_packing(int(inputs.positive_int("yarn.n_fibres", n_fibres)),
-                                float(self.width_m), float(self.height_m), self.shape)
+    def packing(self, n_fibres: int, rule: str = "inscribed") -> tuple[np.ndarray, float]:
+        """Fibre centre offsets (n, 2) [m] (across, through-thickness) and contact diameter
+        [m], by ``rule`` (:data:`PACKINGS`, module docstring)."""
+        n = int(inputs.positive_int("yarn.n_fibres", n_fibres))
+        if rule == "area":
+            unit, d = _area_packing(n, float(self.width_m), float(self.height_m), self.shape)
+        elif rule == "inscribed":
+            unit, d = _best_packing(n, float(self.width_m), float(self.height_m), self.shape)
+        else:
+            raise InputError(f"yarn.fibre_packing must be one of {', '.join(PACKINGS)}, "
+                             f"got {rule!r}")
         return d * unit, d
+
+    def second_moments_m2(self) -> tuple[float, float]:
+        """Mean u² and v² over the section's area [m²] (u across, v through the thickness)."""
+        u = np.linspace(-0.5 * self.width_m, 0.5 * self.width_m, 4001)
+        t = self.half_thickness_m(u)
+        area = np.trapezoid(2 * t, u)
+        return (float(np.trapezoid(u * u * 2 * t, u) / area),
+                float(np.trapezoid(2 * t**3 / 3, u) / area))
 
     def fill_fraction(self, n_fibres: int) -> float:
         """Share of the section covered by the fibres' contact circles, N·d²/(w·h)."""
@@ -229,3 +260,23 @@ def _best_packing(n: int, width: float, height: float,
             if best is None or d > best[1] * (1 + 1e-9):
                 best = (unit, d)
     return best
+
+
+@functools.lru_cache(maxsize=256)
+def _area_packing(n: int, width: float, height: float,
+                  shape: str = "ellipse") -> tuple[np.ndarray, float]:
+    """Unit-spacing centres and d of the ``"area"`` rule (module docstring)."""
+    section = Section(width, height, shape)
+    d = math.sqrt(section.area_m2 / (n * math.sqrt(3.0) / 2.0))
+    uu, vv = section.second_moments_m2()
+    best = None
+    for k in sorted(range(-16, 33), key=abs):
+        for shift in _SHIFTS:
+            unit = _hex_packing(n, section.aspect * 2.0 ** (k / 8.0), shift)
+            # a disc of diameter d adds d²/16 to either second moment
+            mu = d * d * (np.mean(unit[:, 0] ** 2) + 1.0 / 16.0)
+            mv = d * d * (np.mean(unit[:, 1] ** 2) + 1.0 / 16.0)
+            mismatch = abs(math.log(mu / uu)) + abs(math.log(mv / vv))
+            if best is None or mismatch < best[1] - 1e-12:
+                best = (unit, mismatch)
+    return best[0], d

@@ -11,7 +11,7 @@ from .. import inputs
 from ..errors import InputError
 from ..units import TEX, quantity
 from .material import FibreMaterial
-from .section import Section, section_height
+from .section import PACKINGS, Section, section_height
 
 #: largest yarn fibre volume fraction (filament area / section area) a yarn may have
 PACKING_LIMIT = 0.8
@@ -46,6 +46,9 @@ class YarnSpec:
         filament_diameter_m: diameter of one filament [m] (datasheet; "7 um").
         filament_count: filaments per yarn (datasheet; "3K" = 3000). With the
             diameter, count·π·d²/4 must agree with tex/ρ within 10 %.
+        fibre_packing: how the virtual fibres fill the section, ``"inscribed"`` (default: all
+            inside, as large as fits) or ``"area"`` (their hexagonal cells tile the
+            section's area; :mod:`fabmd.geometry.section`).
 
     Every yarn's filament area tex/ρ must fit its section at a yarn fibre volume
     fraction of at most :data:`PACKING_LIMIT`.
@@ -63,6 +66,7 @@ class YarnSpec:
     fibre_volume_fraction: float | None = None
     filament_diameter_m: float | None = None
     filament_count: int | None = None
+    fibre_packing: str = "inscribed"
 
     def __post_init__(self):
         tex = self.linear_density_tex
@@ -73,6 +77,9 @@ class YarnSpec:
         if not isinstance(self.material, FibreMaterial):
             raise InputError(f"yarn.material must be a FibreMaterial, got {self.material!r}")
         object.__setattr__(self, "n_fibres", inputs.positive_int("yarn.n_fibres", self.n_fibres))
+        if self.fibre_packing not in PACKINGS:
+            raise InputError(f"yarn.fibre_packing must be one of {', '.join(PACKINGS)}, got "
+                             f"{self.fibre_packing!r}")
         if self.spacing_m is not None and self.count_per_m is not None:
             if isinstance(self.spacing_m, str) or isinstance(self.count_per_m, str) \
                     or not math.isclose(self.spacing_m * self.count_per_m, 1.0, rel_tol=1e-9):
@@ -164,4 +171,4 @@ class YarnSpec:
 
     def packing(self) -> tuple[np.ndarray, float]:
         """Fibre offsets (n, 2) [m] and contact diameter [m] (see :mod:`.section`)."""
-        return self.section.packing(self.n_fibres)
+        return self.section.packing(self.n_fibres, self.fibre_packing)
