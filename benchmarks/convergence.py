@@ -111,9 +111,9 @@ class Variant:
         return f"n{self.n_fibres}_s{self.spacing_ratio:g}"
 
 
-def read_example(name: str = EXAMPLE) -> dict:
-    """The example scene file as a dict (TOML)."""
-    return tomllib.loads(example_scene(name).read_text())
+def read_example(name: str | None = None) -> dict:
+    """The example scene file as a dict (TOML); default: the study's (``--scene``)."""
+    return tomllib.loads(example_scene(name or EXAMPLE).read_text())
 
 
 def merge(data: dict, settings: dict) -> dict:
