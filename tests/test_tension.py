@@ -26,6 +26,11 @@ def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
     for strain in (0.5, 1.0):
         measured = s["force_at_elongation_n"][f"{strain:g}"]
         assert measured == pytest.approx(n * ea * strain / 100, rel=0.02)
+        # the optical gauge sees the same even strain: F = n E A eps against it too
+        gauged = s["optical_gauge"]["force_at_strain_n"][f"{strain:g}"]
+        assert gauged == pytest.approx(n * ea * strain / 100, rel=0.02)
+    assert s["optical_gauge"]["strain_ratio_to_clamp"] == pytest.approx(1.0, abs=0.02)
+    assert s["optical_gauge"]["length_m"] == pytest.approx(0.5 * s["gauge_length_m"], rel=0.05)
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
     _assert_outputs_and_trajectory(result, test, coupon)
@@ -91,3 +96,4 @@ def test_a_blow_up_keeps_the_frames_up_to_it(tmp_path, monkeypatch):
         test.run(coupon, tmp_path / "boom", engine=Engine(progress=False))
     u = fabmd.load(tmp_path / "boom")
     assert u.trajectory.n_frames >= 2 and u.trajectory[0].data["step"] == 0
+

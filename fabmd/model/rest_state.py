@@ -61,7 +61,12 @@ def relieve_fibre_tension(model: BeadModel, bin_width: float = RELIEF_BIN) -> Be
             continue
         table.append(bt)
         new_types[model.bond_types == t] = len(table)
+    info = dict(model.info)
+    if "bond_types_per_family" in info:  # the fabric's count, now the bins'
+        info["bond_types_per_family"] = {
+            fam: sum(bt.kind == "fibre" and bt.family == fam for bt in table)
+            for fam in info["bond_types_per_family"]}
     return dataclasses.replace(model, bond_types=new_types, bond_type_table=table,
-                               info={**model.info, "fibre_tension_relieved": {
+                               info={**info, "fibre_tension_relieved": {
                                    "bin_width": bin_width,
                                    "bond_types": sum(bt.kind == "fibre" for bt in table)}})

@@ -124,7 +124,7 @@ class BiasExtension(EndClampedTest):
         shared["damping_time_s"] = self.damping_time_s or self.duration_s(model) / 10
         return Tension(max_elongation_pct=100 * self.max_displacement(model)
                        / self.free_length_m(model), clamp_length_m=self.clamp_length_m,
-                       **shared)
+                       gauge_fraction=None, **shared)
 
     def prepare(self, model: BeadModel) -> BeadModel:
         """Check the coupon: H ≥ 2 W, yarns at ±45° to x, shear angle reachable."""
