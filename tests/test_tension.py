@@ -30,7 +30,8 @@ def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
         gauged = s["optical_gauge"]["force_at_strain_n"][f"{strain:g}"]
         assert gauged == pytest.approx(n * ea * strain / 100, rel=0.02)
     assert s["optical_gauge"]["strain_ratio_to_clamp"] == pytest.approx(1.0, abs=0.02)
-    assert s["optical_gauge"]["length_m"] == pytest.approx(0.5 * s["gauge_length_m"], rel=0.05)
+    # the marks: centroids of bands a bead diameter wide, within a bond of the nominal marks
+    assert s["optical_gauge"]["length_m"] == pytest.approx(0.5 * s["gauge_length_m"], rel=0.1)
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
     _assert_outputs_and_trajectory(result, test, coupon)
@@ -99,7 +100,7 @@ def test_a_blow_up_keeps_the_frames_up_to_it(tmp_path, monkeypatch):
 
 
 
-def _plain_weave_one_fibre(cells: int, relieve: bool = True):
+def _plain_weave_one_fibre(cells: int, relieve: bool = True, clamp: str | None = None):
     """The plain-weave example with one virtual fibre per yarn, its tension coupon
     ``cells`` × 2 cells, pulled to 7 % (past its relieved crimp, about 5 %)."""
     import tomllib
@@ -112,15 +113,20 @@ def _plain_weave_one_fibre(cells: int, relieve: bool = True):
         yarn["n_fibres"] = 1
     data["tension"]["max_elongation_pct"] = 7.0
     data["tension"]["coupon"] = {"cells": [cells, 2], "relieve_tension": relieve}
+    if clamp is not None:
+        data["tension"]["clamp_length_m"] = clamp
     return parse_scene(data, source=f"plain_weave.toml, 1 fibre, {cells} cells")
 
 
-#: issue #16's convergence criterion; measured here 2 % at 6.5 % and 1 % at 7 %, where
-#: the coupon cut and relaxed with its crimp tension gave 3× between these lengths at 3 %
+#: issue #16's convergence criterion. Measured (2026-12-02): 3 cells 2.6 % / 2.0 % below
+#: 6 cells at 6.5 / 7 %, transitions 4.83 / 4.78 %. The coupon relaxed as cut, with the
+#: crimp's tension in its fibres and 10 % clamps, gave 0.52 / 0.56 × and 2.57 / 1.90 %;
+#: relieved but with 10 % clamps (1.5 / 3 mm), 0.84 / 0.88 ×: both parts fail this test.
 LENGTH_TOLERANCE = 0.05
 
 
 @pytest.mark.slow
+@pytest.mark.filterwarnings("ignore::fabmd.errors.QuasiStaticWarning")  # the slack toe
 def test_force_per_width_at_a_strain_does_not_depend_on_the_coupon_length(tmp_path):
     """Tension coupons of the plain weave 3 and 6 cells long (1 fibre per yarn): the same
     transition and force per width past it. Cut and relaxed with the crimp's tension in
