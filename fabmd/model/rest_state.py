@@ -5,7 +5,7 @@ periodic cell holds the tension that leaves in its fibres (about 90 N per virtua
 3.6 % fibre strain, on the plain-weave example). A coupon cut from it and relaxed free lets
 that tension go through its cut edges only: friction at the crossings holds it inside, so
 the relaxed coupon's crimp varies along it and with its length (measured on the example's
-7-fibre tension coupons: warp crimp 3.4 % at the cut ends, 2.4 / 1.6 / 1.0 % in the middle
+7-fibre tension coupons: warp crimp 3.4–4.1 % at the cut ends, 2.4 / 1.6 / 1.0 % in the middle
 of coupons 3 / 4 / 6 cells long; the tension toe, and every force at a stated strain,
 followed it). A real fabric is conditioned free of tension before specimens are cut (ISO
 139), evenly over the piece.
