@@ -26,6 +26,12 @@ def test_parallel_straight_fibres_give_n_ea_epsilon(tmp_path):
     for strain in (0.5, 1.0):
         measured = s["force_at_elongation_n"][f"{strain:g}"]
         assert measured == pytest.approx(n * ea * strain / 100, rel=0.02)
+        # the optical gauge sees the same even strain: F = n E A eps against it too
+        gauged = s["optical_gauge"]["force_at_strain_n"][f"{strain:g}"]
+        assert gauged == pytest.approx(n * ea * strain / 100, rel=0.02)
+    assert s["optical_gauge"]["strain_ratio_to_clamp"] == pytest.approx(1.0, abs=0.02)
+    # the marks: centroids of bands a bead diameter wide, within a bond of the nominal marks
+    assert s["optical_gauge"]["length_m"] == pytest.approx(0.5 * s["gauge_length_m"], rel=0.1)
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
     _assert_outputs_and_trajectory(result, test, coupon)
@@ -91,3 +97,86 @@ def test_a_blow_up_keeps_the_frames_up_to_it(tmp_path, monkeypatch):
         test.run(coupon, tmp_path / "boom", engine=Engine(progress=False))
     u = fabmd.load(tmp_path / "boom")
     assert u.trajectory.n_frames >= 2 and u.trajectory[0].data["step"] == 0
+
+
+
+def _plain_weave_one_fibre(cells: int, relieve: bool = True, clamp: str | None = None):
+    """The plain-weave example with one virtual fibre per yarn, its tension coupon
+    ``cells`` × 2 cells, pulled to 7 % (past its relieved crimp, about 5 %)."""
+    import tomllib
+
+    from fabmd.examples_dir import example_scene
+    from fabmd.scenefile import parse_scene
+
+    data = tomllib.loads(example_scene("plain_weave.toml").read_text())
+    for yarn in data["yarns"].values():
+        yarn["n_fibres"] = 1
+    data["tension"]["max_elongation_pct"] = 7.0
+    data["tension"]["coupon"] = {"cells": [cells, 2], "relieve_tension": relieve}
+    if clamp is not None:
+        data["tension"]["clamp_length_m"] = clamp
+    return parse_scene(data, source=f"plain_weave.toml, 1 fibre, {cells} cells")
+
+
+#: issue #16's convergence criterion. Measured (2026-12-02): 3 cells 2.6 % / 2.0 % below
+#: 6 cells at 6.5 / 7 %, transitions 4.83 / 4.78 %. The coupon relaxed as cut, with the
+#: crimp's tension in its fibres and 10 % clamps, gave 0.52 / 0.56 × and 2.57 / 1.90 %;
+#: relieved but with 10 % clamps (1.5 / 3 mm), 0.84 / 0.88 ×: both parts fail this test.
+LENGTH_TOLERANCE = 0.05
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore::fabmd.errors.QuasiStaticWarning")  # the slack toe
+def test_force_per_width_at_a_strain_does_not_depend_on_the_coupon_length(tmp_path):
+    """Tension coupons of the plain weave 3 and 6 cells long (1 fibre per yarn): the same
+    transition and force per width past it. Cut and relaxed with the crimp's tension in
+    their fibres, the coupons' crimp varied along them and with their length (about 60 s)."""
+    from fabmd.pipeline import run_crimp, run_test
+
+    engine = Engine(progress=False)
+    run_crimp(_plain_weave_one_fibre(3), tmp_path / "crimp", engine=engine, form="cell")
+    curves, summaries = {}, {}
+    for cells in (3, 6):
+        summary = run_test(_plain_weave_one_fibre(cells), "tension", tmp_path / f"t{cells}",
+                           engine=engine, crimped=tmp_path / "crimp")
+        s = summaries[cells] = summary["test_summary"]
+        curve = np.genfromtxt(tmp_path / f"t{cells}" / "tension" / "curve.csv", delimiter=",",
+                              names=True)
+        curves[cells] = (curve["elongation_pct"], curve["force_per_width_n_m"])
+        # clamps of one cell (5 mm) each: the free length is the rest
+        assert s["gauge_length_m"] == pytest.approx(cells * 5e-3 - 10e-3, abs=1e-3)
+    for strain in (6.5, 7.0):
+        f3, f6 = (float(np.interp(strain, *curves[c])) for c in (3, 6))
+        assert f3 == pytest.approx(f6, rel=LENGTH_TOLERANCE), strain
+    t3, t6 = (summaries[c]["transition_elongation_pct"] for c in (3, 6))
+    assert abs(t3 - t6) < 0.3  # the toe ends at the same strain
+
+
+@pytest.mark.parametrize("length_mm, clamp_mm", [(30, 5), (80, 8)])
+def test_clamps_hold_at_least_one_weave_repeat(length_mm, clamp_mm):
+    """Default clamps: 10 % of the coupon, but at least the unit cell along the load."""
+    import dataclasses
+
+    coupon = parallel_fibres(length_m=length_mm * 1e-3)
+    coupon = dataclasses.replace(coupon, info={**coupon.info, "unit_cell_m": [5e-3, 5e-3]})
+    left, right, gauge = Tension().clamps(coupon)
+    x = coupon.positions[:, 0]
+    held = (x < left).sum() / 4 * (x[1] - x[0])  # clamped length per fibre
+    assert held == pytest.approx(clamp_mm * 1e-3, abs=0.3e-3)
+    # without a unit cell (a hand-built piece): 10 % as before
+    assert Tension().clamps(parallel_fibres(length_m=length_mm * 1e-3))[0] < left + 1e-12
+
+
+def test_the_optical_gauge_follows_two_cross_sections_between_the_clamps():
+    coupon = parallel_fibres(length_m=20e-3)
+    text = Tension().input_text(coupon)
+    assert "group           gauge_left region gauge_left" in text
+    assert "${gauge_distance}" in text and "gauge_distance_m" in text
+    a, b, band = Tension().gauge_marks(coupon)
+    left, right, _ = Tension().clamps(coupon)
+    assert b - a == pytest.approx(0.5 * (right - left))
+    assert left < a - band and b + band < right
+    plain = Tension(gauge_fraction=None).input_text(coupon)
+    assert "gauge" not in plain.replace("gauge length", "")
+    with pytest.raises(InputError, match="tension.gauge_fraction"):
+        Tension(gauge_fraction=1.0)

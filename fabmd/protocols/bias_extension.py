@@ -122,9 +122,13 @@ class BiasExtension(EndClampedTest):
         """The clamping and loading of this test, as the tension protocol runs them."""
         shared = {f.name: getattr(self, f.name) for f in dataclasses.fields(ClampedTest)}
         shared["damping_time_s"] = self.damping_time_s or self.duration_s(model) / 10
+        # this test's clamps (10 % of the coupon by default), not the tension test's default
+        x = model.positions[:, 0]
+        clamp = self.clamp_length_m if self.clamp_length_m is not None else \
+            self.default_clamp_length_m(model, float(x.max() - x.min()))
         return Tension(max_elongation_pct=100 * self.max_displacement(model)
-                       / self.free_length_m(model), clamp_length_m=self.clamp_length_m,
-                       **shared)
+                       / self.free_length_m(model), clamp_length_m=clamp,
+                       gauge_fraction=None, **shared)
 
     def prepare(self, model: BeadModel) -> BeadModel:
         """Check the coupon: H ≥ 2 W, yarns at ±45° to x, shear angle reachable."""

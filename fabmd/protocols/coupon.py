@@ -23,6 +23,7 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.bending import add_bending
 from ..model.cohesion import DEFAULT_REACH, add_cohesion
 from ..model.contact import ContactModel
+from ..model.rest_state import relieve_fibre_tension
 from ..model.timestep import stable_time_step_s
 from ..model.transform import cut, tile
 from ..results.folder import write_json
@@ -74,6 +75,12 @@ class Coupon:
             needs to trellis instead of fraying.
         cohesion_reach: link beads of other fibres of the yarn closer than this many bead
             diameters.
+        relieve_tension: set every fibre bond's rest length to its length as cut, before
+            the relaxation (:func:`fabmd.model.rest_state.relieve_fibre_tension`): the
+            crimp's locked-in yarn tension leaves the whole coupon evenly, as a fabric
+            conditioned free of tension before cutting, instead of through the cut edges
+            (which leaves a crimp that varies along the coupon and with its length).
+            False (default): the fibres keep the crimp's rest lengths.
     """
 
     length_m: float
@@ -88,6 +95,7 @@ class Coupon:
     bending_factor: float = 0.0
     cohesion_factor: float = 0.0
     cohesion_reach: float = DEFAULT_REACH
+    relieve_tension: bool = False
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -101,6 +109,9 @@ class Coupon:
         inputs.in_range("coupon.bending_factor", self.bending_factor, 0.0, 1.0)
         inputs.in_range("coupon.cohesion_factor", self.cohesion_factor, 0.0, 1.0)
         inputs.in_range("coupon.cohesion_reach", self.cohesion_reach, 1.0, 3.0)
+        if not isinstance(self.relieve_tension, bool):
+            raise InputError(f"coupon.relieve_tension must be true or false, got "
+                             f"{self.relieve_tension!r}")
 
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
@@ -124,6 +135,8 @@ class Coupon:
                              "use a fully periodic cell or a finite piece")
         coupon = cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
                      edge_zone_m=self.edge_zone_m)
+        if self.relieve_tension:
+            coupon = relieve_fibre_tension(coupon)
         if self.bending_factor > 0:
             coupon = add_bending(coupon, self.bending_factor)
         return coupon

@@ -27,6 +27,10 @@ class EndClampedTest(ClampedTest):
     def check_fields(self) -> None:
         self.check_positive_or_none("clamp_length_m")
 
+    def default_clamp_length_m(self, model: BeadModel, length_m: float) -> float:
+        """Clamp length when ``clamp_length_m`` is None: 10 % of the coupon [m]."""
+        return 0.1 * length_m
+
     def clamps(self, model: BeadModel) -> tuple[float, float, float]:
         """(x of the left clamp's inner edge, of the right one's, gauge length) [m].
 
@@ -34,7 +38,8 @@ class EndClampedTest(ClampedTest):
         """
         x = model.positions[:, 0]
         length = float(x.max() - x.min())
-        clamp = self.clamp_length_m if self.clamp_length_m is not None else 0.1 * length
+        clamp = self.clamp_length_m if self.clamp_length_m is not None else \
+            self.default_clamp_length_m(model, length)
         if 2 * clamp >= 0.8 * length:
             raise InputError(f"{self.protocol}.clamp_length_m = {clamp:g} m leaves no gauge "
                              f"length on a {length:g} m coupon; use at most {0.4 * length:g} m "

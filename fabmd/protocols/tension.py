@@ -4,7 +4,9 @@ The coupon's length is along x. Both ends, ``clamp_length_m`` long, are clamped:
 their beads move as rigid bodies along x in opposite directions (smooth start,
 then constant speed), every other movement held. Force is the reaction on the
 clamps (mean of both ends); elongation is the clamp separation change over the
-gauge length (distance between the inner clamp edges). Quasi-static evidence:
+gauge length (distance between the inner clamp edges). An optical gauge (video
+extensometer) reports the strain between two cross-sections away from the clamps as
+well (``gauge_strain_pct``; the summary's ``optical_gauge``). Quasi-static evidence:
 kinetic/strain energy ratio over the run and an energy balance
 (:mod:`fabmd.scene.energy`); ``check_rate`` reruns at half speed.
 """
@@ -45,13 +47,18 @@ class Tension(EndClampedTest):
     The loading, contact, output, ``relax`` and ``drag`` fields are those of
     :class:`~fabmd.protocols.driven.ClampedTest` (the affine drag field: the clamps'
     stretch along x), ``clamp_length_m`` and :meth:`clamps` those of
-    :class:`~fabmd.protocols.end_clamps.EndClampedTest`.
+    :class:`~fabmd.protocols.end_clamps.EndClampedTest`; the clamp length defaults to 10 %
+    of the coupon but at least one weave repeat (:meth:`default_clamp_length_m`).
 
     Args:
         max_elongation_pct: elongation at the end of the test [%] (0, 50].
         report_elongations_pct: elongations at which forces are reported.
         loading_speed: adaptive loading speed (opt-in, :mod:`fabmd.scene.adaptive`); the
             speed history is the curve's ``clamp_speed_m_s``.
+        gauge_fraction: optical gauge length over the free length between the clamps, in
+            (0, 0.9]: two cross-sections centred on the coupon, each the beads that start
+            within a bead diameter of its mark (default 0.5: the marks a quarter of the free
+            length from each clamp); None: no optical gauge.
     """
 
     protocol = PROTOCOL
@@ -62,10 +69,14 @@ class Tension(EndClampedTest):
     max_elongation_pct: float = 3.0
     report_elongations_pct: tuple[float, ...] = (0.5, 1.0, 2.0)
     loading_speed: AdaptiveLoading = field(default_factory=AdaptiveLoading)
+    gauge_fraction: float | None = 0.5
 
     def check_fields(self) -> None:
         inputs.in_range("tension.max_elongation_pct", self.max_elongation_pct, 0, 50,
                         low_open=True)
+        if self.gauge_fraction is not None:
+            inputs.in_range("tension.gauge_fraction", self.gauge_fraction, 0, 0.9,
+                            low_open=True)
         if not isinstance(self.loading_speed, AdaptiveLoading):
             raise InputError(f"tension.loading_speed must be an AdaptiveLoading, got "
                              f"{self.loading_speed!r}")
@@ -82,6 +93,34 @@ class Tension(EndClampedTest):
         _, _, gauge = self.clamps(model)
         return 0.5 * self.max_elongation_pct / 100 * gauge
 
+    def default_clamp_length_m(self, model: BeadModel, length_m: float) -> float:
+        """10 % of the coupon, but at least one weave repeat along the load (the larger side
+        of the model's unit cell, where it knows it; at most 35 % of the coupon) [m]: the
+        crimp at a cut end relaxes differently over about a repeat, and a clamp that holds
+        that zone keeps it out of the free length (measured on the plain weave, 1 fibre per
+        yarn, relieved coupons 4 and 6 cells long to 8 %: the force at 6 % moved 13.8 %
+        with 10 % clamps, 2.5 % with one-cell clamps)."""
+        cell = model.info.get("unit_cell_m")
+        repeat = float(max(cell)) if cell else 0.0
+        return max(0.1 * length_m, min(repeat, 0.35 * length_m))
+
+    def gauge_marks(self, model: BeadModel) -> tuple[float, float, float]:
+        """(x of the left gauge mark, of the right one, half the width of the band of beads
+        each mark follows) [m]: centred between the clamps, ``gauge_fraction`` of the free
+        length apart; the band is a bead diameter wide."""
+        left, right, _ = self.clamps(model)
+        centre, half = 0.5 * (left + right), 0.5 * self.gauge_fraction * (right - left)
+        return centre - half, centre + half, 0.5 * float(model.diameters.max())
+
+    def gauge_block(self, model: BeadModel) -> str:
+        """The optical gauge's LAMMPS text (groups and ``v_gauge_distance``); empty without
+        one."""
+        if self.gauge_fraction is None:
+            return ""
+        a, b, band = self.gauge_marks(model)
+        return render("tension_gauge", left_lo=a - band, left_hi=a + band, right_lo=b - band,
+                      right_hi=b + band)
+
     def input_text(self, model: BeadModel, extra: str = "", header: str | None = None) -> str:
         """The LAMMPS input; ``extra`` (e.g. a dump) goes in before the run; ``header``
         names the test in its first comment line (default: tension)."""
@@ -97,12 +136,14 @@ class Tension(EndClampedTest):
             vx=f"v_v*(2*x-({fmt(left + right)}))/({fmt(right - left)}+2*v_u)", vy="0",
             tools="clamps"))
         adaptive = self.loading_speed.adaptive
+        gauge = self.gauge_fraction is not None
         outputs = self.outputs_block(
             model, power, power_ref, mean_values="c_f_left c_f_right",
             mean_names="force_left_n force_right_n",
-            print_values="${u} ${v}" if adaptive else "${u}",
-            print_names="clamp_displacement_m clamp_speed_m_s" if adaptive
-            else "clamp_displacement_m",
+            print_values=("${u} ${v}" if adaptive else "${u}")
+            + (" ${gauge_distance}" if gauge else ""),
+            print_names=("clamp_displacement_m clamp_speed_m_s" if adaptive
+                         else "clamp_displacement_m") + (" gauge_distance_m" if gauge else ""),
             thermo_values="v_u v_v c_f_left c_f_right" if adaptive
             else "v_u c_f_left c_f_right", damping_power=damping_power)
         displacement, velocity = load.lammps_displacement(), load.lammps_velocity()
@@ -112,7 +153,8 @@ class Tension(EndClampedTest):
             displacement, velocity = self.clamp_travel(model), f"({velocity})*v_adapt_factor"
             moves = ("NULL", "NULL")
         text = render("tension", x_left=left, x_right=right,
-                      relax=self.relax_block(model, "clamps", "free", ref_force),
+                      relax=self.gauge_block(model)
+                      + self.relax_block(model, "clamps", "free", ref_force),
                       displacement=displacement, velocity=velocity,
                       right_displacement=moves[0], left_displacement=moves[1],
                       damping=damping, outputs=outputs)
@@ -170,6 +212,12 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
     }
     if "clamp_speed_m_s" in out.columns:  # adaptive loading: the speed history
         curve["clamp_speed_m_s"] = out["clamp_speed_m_s"]
+    optical = None
+    if "gauge_distance_m" in out.columns:  # the optical gauge (older runs have none)
+        distance = out["gauge_distance_m"]
+        curve["gauge_strain_pct"] = 100 * (distance / distance[0] - 1)
+        optical = optical_gauge(curve["gauge_strain_pct"], force, width, float(distance[0]),
+                              test, float(100 * elongation[-1]))
     fit = bilinear_fit(100 * elongation, force)
     summary = {
         "protocol": PROTOCOL,
@@ -189,6 +237,7 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
                                   values_at(100 * elongation, force,
                                             test.report_elongations_pct).items()},
         "max_force_n": float(force.max()),
+        **({"optical_gauge": optical} if optical is not None else {}),
         "clamp_force_mismatch": float(np.abs(out["force_left_n"] + out["force_right_n"])[-1]
                                       / max(abs(force[-1]), 1e-300)),
         # start-up: the smooth start, the first tenth of the elongation and the slack toe
@@ -198,7 +247,9 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
     ke = summary["max_kinetic_to_strain_energy"]
     plot = {"path": "curve.png",
             "series": [{"x": curve["elongation_pct"], "y": curve["force_per_width_n_m"],
-                        "label": "fabric"}],
+                        "label": "fabric, clamp strain"}]
+            + ([{"x": curve["gauge_strain_pct"], "y": curve["force_per_width_n_m"],
+                 "label": "fabric, optical gauge strain"}] if optical is not None else []),
             "xlabel": "elongation [%]", "ylabel": "force per width [N/m]",
             "title": "Uniaxial tension",
             "notes": f"gauge {1e3 * gauge:.1f} mm, width {1e3 * width:.1f} mm"
@@ -207,6 +258,28 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
             "marks": tension_marks(fit, width, summary["force_at_elongation_n"],
                                    float(100 * elongation.max()))}
     return TensionResult(Path(run_dir), curve, summary, [plot])
+
+
+def optical_gauge(strain_pct: np.ndarray, force_n: np.ndarray, width_m: float,
+                  length_m: float, test: Tension, clamp_strain_pct: float) -> dict:
+    """The summary's ``optical_gauge``: forces at the report strains and the bilinear
+    stiffnesses against the gauge strain, and the gauge strain at the end over the clamp
+    strain there (1 where the coupon strains evenly)."""
+    fit = bilinear_fit(strain_pct, force_n)
+    forces = values_at(strain_pct, force_n, test.report_elongations_pct)
+    return {
+        "length_m": length_m,
+        "gauge_fraction": test.gauge_fraction,
+        "marks": "two cross-sections centred on the coupon, gauge_fraction of the free "
+                 "length apart: the beads within a bead diameter of each mark at the start",
+        "final_strain_pct": float(strain_pct[-1]),
+        "strain_ratio_to_clamp": float(strain_pct[-1] / clamp_strain_pct)
+        if clamp_strain_pct else None,
+        "initial_stiffness_n_m_per_width": fit["initial_slope"] * 100 / width_m,
+        "final_stiffness_n_m_per_width": fit["final_slope"] * 100 / width_m,
+        "transition_strain_pct": fit["break_x"],
+        "force_at_strain_n": {f"{k:g}": v for k, v in forces.items()},
+    }
 
 
 def tension_marks(fit: dict, width_m: float, report: dict, max_pct: float) -> list[dict]:
