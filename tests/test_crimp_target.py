@@ -9,6 +9,7 @@ from fabmd.engine import Engine
 from fabmd.errors import InputError
 from fabmd.protocols.crimp import Crimp
 from fabmd.protocols.crimp_target import derive_expansion, expansion_for, rest_crimp
+from fabmd.protocols.crimp_tension import shrink_bounds
 from fabmd.results.measure import family_crimp
 
 from .fabrics import parallel_fibres, plain_weave_cell
@@ -86,6 +87,18 @@ def test_targets_that_clash_with_other_settings_are_refused():
     # other families may have either
     Crimp(target_tension={"weft": "1 cN/tex"}, target_crimp_pct={"warp": 1.0},
           expansion={"weft": -0.01})
+    # "auto" beside a tension bounds the tension search's shrink
+    Crimp(target_tension="1 N", target_crimp_pct={"warp": "auto"})
+
+
+def test_auto_bounds_the_tension_search_shrink():
+    cell = plain_weave_cell()
+    c0 = rest_crimp(cell)["warp"]
+    crimp = Crimp(target_tension={"warp": 1.0, "weft": 1.0},
+                  target_crimp_pct={"warp": "auto"}, auto_margin_pct=2.5)
+    assert shrink_bounds(crimp, cell, ["warp", "weft"]) == {
+        "warp": pytest.approx(1.025 / (1 + c0) - 1)}
+    assert shrink_bounds(Crimp(target_tension=1.0), cell, ["warp", "weft"]) == {}
 
 
 def test_targets_the_numbers_cannot_reach_are_refused_with_the_arithmetic():
@@ -141,3 +154,21 @@ def test_crimp_reaches_its_target_crimps(tmp_path):
         tension = s["crimped"]["tension"][fam]["mean_fibre_tension_n"]
         axial = loose.bond_type_table[0].axial_stiffness_n
         assert abs(tension) < 2.5e-3 * axial, (fam, tension, axial)
+
+
+@pytest.mark.lammps
+def test_tension_search_stops_at_the_auto_shrink_bound(tmp_path):
+    """A yarn tension this loose cell carries only with its warp pulled straighter than
+    the "auto" margin allows is not reached: the search stops at the bound (2 runs), says
+    so, and the warp keeps the margin's crimp."""
+    loose = plain_weave_cell()
+    crimp = Crimp(target_tension={"warp": 50.0}, target_crimp_pct={"warp": "auto"})
+    with pytest.warns(UserWarning, match="warp at the \"auto\" shrink bound"):
+        result = crimp.run(loose, tmp_path / "run", engine=Engine(progress=False))
+    search = result.summary["tension_search"]
+    bound = search["shrink_bound"]["warp"]
+    assert bound == pytest.approx(1.03 / (1 + rest_crimp(loose)["warp"]) - 1)
+    assert not search["reached"] and search["at_bound"] == ["warp"]
+    assert [r["expansion"]["warp"] for r in search["runs"]] == [0.0, bound]
+    assert result.summary["expansion"]["warp"] == bound
+    assert result.summary["crimped"]["crimp_pct"]["warp"] >= 3.0 - 0.01

@@ -80,7 +80,8 @@ class Crimp:
             (:mod:`fabmd.protocols.crimp_target`), e.g. ``{"warp": 1.2, "weft": 0.8}``;
             ``"auto"`` (binders): shrink by the loose crimp less ``auto_margin_pct``, so
             the yarns end under tension but still woven. A family is given either here or
-            in ``expansion``.
+            in ``expansion``; beside ``target_tension`` only ``"auto"``, which then bounds
+            the tension search's shrink instead of setting it.
         auto_margin_pct: the crimp [%] an ``"auto"`` family keeps (> 0; default 3).
         trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
             stops once quasi-static, so frames are spread over :meth:`expected_steps`
@@ -130,10 +131,13 @@ class Crimp:
         tension = self.target_tension
         named = set(tension) if isinstance(tension, dict) else (
             set() if tension is None else set(self.target_crimp_pct))
-        if named & set(self.target_crimp_pct):
+        # "auto" beside a target tension bounds the tension search's shrink
+        numbers = {f for f, v in self.target_crimp_pct.items() if not isinstance(v, str)}
+        if named & numbers:
             raise InputError(f"crimp.target_crimp_pct and crimp.target_tension both name "
-                             f"{sorted(named & set(self.target_crimp_pct))}: a family's "
-                             f"expansion serves one target")
+                             f"{sorted(named & numbers)}: a family's expansion serves one "
+                             f"target (\"auto\" may stand beside a tension: it bounds the "
+                             f"shrink)")
 
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
