@@ -172,3 +172,32 @@ def test_tension_search_stops_at_the_auto_shrink_bound(tmp_path):
     assert [r["expansion"]["warp"] for r in search["runs"]] == [0.0, bound]
     assert result.summary["expansion"]["warp"] == bound
     assert result.summary["crimped"]["crimp_pct"]["warp"] >= 3.0 - 0.01
+
+
+def test_scene_file_targets_on_the_example_cell(tmp_path):
+    """The plain-weave example with its expansion replaced by target crimps: the derived
+    strains follow the cell's loose geometry; an unreachable one fails before LAMMPS,
+    naming the scene file's key and the numbers."""
+    from pathlib import Path
+
+    from fabmd.pipeline import crimp_stage, periodic_cell
+    from fabmd.scenefile import load_scene
+
+    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    assert "expansion = { warp = -0.09, weft = -0.09 }" in text
+    scene_file = tmp_path / "targets.toml"
+    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+                                       'target_crimp_pct = { warp = 1.0, weft = "auto" }'))
+    scene = load_scene(scene_file)
+    cell = periodic_cell(scene)
+    crimp = crimp_stage(scene)
+    c0 = rest_crimp(cell)
+    assert crimp.family_expansion(cell) == {
+        "warp": pytest.approx(1.01 / (1 + c0["warp"]) - 1),
+        "weft": pytest.approx(1.03 / (1 + c0["weft"]) - 1)}
+    assert "crimp" in crimp.input_text(cell)
+    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+                                       "target_crimp_pct = { warp = 0 }"))
+    with pytest.raises(InputError, match="target_crimp_pct.warp = 0: the warp yarns are "
+                                         "woven .* cannot be pulled straight"):
+        crimp_stage(load_scene(scene_file)).input_text(periodic_cell(load_scene(scene_file)))
