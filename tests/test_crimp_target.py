@@ -201,3 +201,19 @@ def test_scene_file_targets_on_the_example_cell(tmp_path):
     with pytest.raises(InputError, match="target_crimp_pct.warp = 0: the warp yarns are "
                                          "woven .* cannot be pulled straight"):
         crimp_stage(load_scene(scene_file)).input_text(periodic_cell(load_scene(scene_file)))
+
+
+def test_calibration_refuses_a_scene_whose_crimp_derives_its_expansion(tmp_path):
+    from pathlib import Path
+
+    from fabmd.calibration import run_calibration
+    from fabmd.scenefile import load_scene
+
+    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    scene_file = tmp_path / "targets.toml"
+    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+                                       "target_crimp_pct = { warp = 1.0 }")
+                          + "\n[calibrate]\ncrimp_pct = { weft = 1.0 }\n")
+    with pytest.raises(InputError, match="target_crimp_pct derives the expansion itself"):
+        run_calibration(load_scene(scene_file), tmp_path / "out")
+    assert not (tmp_path / "out").exists()
