@@ -217,3 +217,19 @@ def test_calibration_refuses_a_scene_whose_crimp_derives_its_expansion(tmp_path)
     with pytest.raises(InputError, match="target_crimp_pct derives the expansion itself"):
         run_calibration(load_scene(scene_file), tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_fabmd_crimp_refuses_an_unreachable_target_before_any_folder(tmp_path):
+    from pathlib import Path
+
+    from fabmd.pipeline import run_crimp
+    from fabmd.scenefile import load_scene
+
+    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    scene_file = tmp_path / "targets.toml"
+    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+                                       'target_crimp_pct = { weft = "auto" }\n'
+                                       "auto_margin_pct = 50"))
+    with pytest.raises(InputError, match="nothing to shrink"):
+        run_crimp(load_scene(scene_file), tmp_path / "crimp", form="cell")
+    assert list(tmp_path.iterdir()) == [scene_file]
