@@ -75,6 +75,9 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     if base.target_tension is not None:
         raise InputError(f"{where}: [crimp] target_tension searches the expansion itself: "
                          f"for a calibration give it as [calibrate] target_tension instead")
+    if base.target_crimp_pct:
+        raise InputError(f"{where}: [crimp] target_crimp_pct derives the expansion itself: "
+                         f"for a calibration give the crimp as [calibrate] crimp_pct instead")
     compaction = protocol_stage(scene, "compaction") if targets.at_pressure_pa else None
     text = Path(scene.source).read_text() if scene.source else None
     if text is not None:  # can it be written back? (before anything runs)

@@ -58,12 +58,14 @@ def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
         raise InputError(f"crimp form must be 'fabric' or 'cell', got {form!r}")
     check_scene(scene)  # every stage table, before the crimp starts
     loose = scene.model() if form == "fabric" else periodic_cell(scene)
+    crimp = crimp_stage(scene)
+    crimp.check_model(loose)  # families and target crimps against this fabric: no folder yet
     if out is None:
-        return crimp_stage(scene).run(loose, out, engine=engine, overwrite=overwrite)
+        return crimp.run(loose, out, engine=engine, overwrite=overwrite)
     # an existing crimp is replaced only when the new one succeeded
     work = begin_run(out, overwrite=overwrite, prefix="crimp")
     try:
-        result = crimp_stage(scene).run(loose, work, engine=engine)
+        result = crimp.run(loose, work, engine=engine)
     except (RunInterrupted, KeyboardInterrupt):
         raise
     except BaseException as exc:

@@ -30,6 +30,7 @@ def run(args) -> int:
             f"  {s.get('stop', s['steps'])}\n"
             f"  thickness {1e3 * lo['thickness_m']:.3f} -> {1e3 * cr['thickness_m']:.3f} mm\n"
             f"  crimp per fibre {crimps}\n"
+            f"{_targets_text(s)}"
             f"  fibre volume fraction {cr['fibre_volume_fraction']:.3f}\n"
             f"  {_datasheet_line(s)}\n"
             f"  {tension_line(s.get('yarn_tension') or {})}\n"
@@ -51,3 +52,12 @@ def _datasheet_line(s: dict) -> str:
         if v.get("fibre_volume_fraction") is not None)
     text += f"; yarns passed through: {s['pass_through']['flipped_pairs']} flipped pairs"
     return text
+
+
+def _targets_text(s: dict) -> str:
+    """One line per family whose expansion came from ``[crimp] target_crimp_pct`` ('')."""
+    return "".join(
+        f"  {f}: expansion {t['expansion']:+.4f} from its loose rest crimp "
+        f"{t['loose_rest_crimp_pct']:.2f} % to the target {t['target_crimp_pct']:.2f} %"
+        f"{' (auto)' if t['auto'] else ''}\n"
+        for f, t in (s.get("crimp_targets") or {}).items())

@@ -75,6 +75,14 @@ class Crimp:
             cN/tex; the expansion of those families is then searched for it
             (:mod:`fabmd.protocols.crimp_tension`; ``expansion`` is the start). None:
             the expansion as given, whatever tension it leaves (reported either way).
+        target_crimp_pct: the crimp [%] per family the crimped fabric should have, its
+            expansion then derived from the loose geometry (1 + c)/(1 + c0) − 1
+            (:mod:`fabmd.protocols.crimp_target`), e.g. ``{"warp": 1.2, "weft": 0.8}``;
+            ``"auto"`` (binders): shrink by the loose crimp less ``auto_margin_pct``, so
+            the yarns end under tension but still woven. A family is given either here or
+            in ``expansion``; beside ``target_tension`` only ``"auto"``, which then bounds
+            the tension search's shrink instead of setting it.
+        auto_margin_pct: the crimp [%] an ``"auto"`` family keeps (> 0; default 3).
         trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
             stops once quasi-static, so frames are spread over :meth:`expected_steps`
             (the ramp and a quarter of the relaxation budget); the crimped state is
@@ -91,6 +99,8 @@ class Crimp:
     samples: int = 200
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=20))
     target_tension: dict | str | float | None = None
+    target_crimp_pct: dict[str, float | str] = field(default_factory=dict)
+    auto_margin_pct: float = 3.0
 
     def __post_init__(self):
         if not isinstance(self.expansion, dict):
@@ -106,6 +116,28 @@ class Crimp:
             from .crimp_tension import check_target_tension
 
             check_target_tension(self.target_tension)
+        if self.target_crimp_pct:
+            self._check_crimp_targets()
+
+    def _check_crimp_targets(self) -> None:
+        from .crimp_target import check_target_crimp
+
+        check_target_crimp(self.target_crimp_pct, self.auto_margin_pct)
+        both = sorted(set(self.target_crimp_pct) & set(self.expansion))
+        if both:
+            raise InputError(f"crimp.target_crimp_pct and crimp.expansion both name {both}: "
+                             f"a family's expansion is given or derived from its target "
+                             f"crimp, not both")
+        tension = self.target_tension
+        named = set(tension) if isinstance(tension, dict) else (
+            set() if tension is None else set(self.target_crimp_pct))
+        # "auto" beside a target tension bounds the tension search's shrink
+        numbers = {f for f, v in self.target_crimp_pct.items() if not isinstance(v, str)}
+        if named & numbers:
+            raise InputError(f"crimp.target_crimp_pct and crimp.target_tension both name "
+                             f"{sorted(named & numbers)}: a family's expansion serves one "
+                             f"target (\"auto\" may stand beside a tension: it bounds the "
+                             f"shrink)")
 
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
@@ -113,6 +145,24 @@ class Crimp:
         if unknown:
             raise InputError(f"crimp.expansion names families {sorted(unknown)} that the fabric "
                              f"does not have (it has {list(model.family_names)})")
+        self.family_expansion(model)  # refuses unreachable crimp targets
+
+    def crimp_targets(self, model: BeadModel) -> dict[str, dict]:
+        """Per family of ``target_crimp_pct``: loose rest crimp, target and the derived
+        expansion (:func:`fabmd.protocols.crimp_target.derive_expansion`); {} without."""
+        if not self.target_crimp_pct:
+            return {}
+        from .crimp_target import derive_expansion
+
+        return derive_expansion(model, self.target_crimp_pct, self.auto_margin_pct)
+
+    def family_expansion(self, model: BeadModel) -> dict[str, float]:
+        """The strain α·ΔT per family the ramp reaches: ``expansion`` and those derived
+        from ``target_crimp_pct`` (the same dict as ``expansion`` without targets)."""
+        if not self.target_crimp_pct:
+            return self.expansion
+        derived = {f: t["expansion"] for f, t in self.crimp_targets(model).items()}
+        return {**self.expansion, **derived}
 
     def shrink_warnings(self, model: BeadModel) -> list[str]:
         """Families told to shrink more than their loose crimp (``model.info["crimp"]``):
@@ -120,7 +170,7 @@ class Crimp:
         zig-zags and bends what it crosses. One line per family."""
         loose = model.info.get("crimp") or {}
         out = []
-        for fam, strain in self.expansion.items():
+        for fam, strain in self.family_expansion(model).items():
             crimp = loose.get(fam)
             if isinstance(crimp, int | float) and strain < 0 and -strain > crimp:
                 out.append(f"crimp.expansion.{fam} = {strain:g} shrinks the {fam} yarns by "
@@ -131,7 +181,8 @@ class Crimp:
 
     def rest_length_scale(self, model: BeadModel) -> dict[int, float]:
         """Final rest-length factor of every bond type (1-based)."""
-        return {i: 1.0 + self.expansion.get(bt.family, 0.0)
+        expansion = self.family_expansion(model)
+        return {i: 1.0 + expansion.get(bt.family, 0.0)
                 for i, bt in enumerate(model.bond_type_table, start=1)}
 
     def time_step_s(self, model: BeadModel) -> float:
@@ -161,7 +212,8 @@ class Crimp:
                        duration_s=steps * dt, extra={"ramp_steps": ramp})
 
     def reference_force_n(self, model: BeadModel) -> float:
-        forces = [abs(self.expansion.get(bt.family, 0.0)) * bt.bond_axial_stiffness_n
+        expansion = self.family_expansion(model)
+        forces = [abs(expansion.get(bt.family, 0.0)) * bt.bond_axial_stiffness_n
                   for bt in model.bond_type_table]
         floor = 1e-3 * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
         return max(max(forces), floor)
@@ -308,7 +360,8 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
         BondType(bt.coefficient, bt.rest_length_m * scale[i], bt.family, bt.axial_stiffness_n,
                  spec=bt.spec)
         for i, bt in enumerate(crimped.bond_type_table, start=1)]
-    crimped.info = dict(crimped.info, crimp={"expansion": crimp.expansion})
+    expansion = crimp.family_expansion(loose)
+    crimped.info = dict(crimped.info, crimp={"expansion": expansion})
     crimped.save(run_dir, stem=CRIMPED)
     qs = crimp.quasi_static
     # how the run ended, from LAMMPS's log: the relaxation stops at its 'settled' halt,
@@ -348,7 +401,9 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
                     "label": f"LAMMPS stopped (step {steps:,}): {end.stopped_by}"}])
     summary = {
         "protocol": PROTOCOL,
-        "expansion": crimp.expansion,
+        "expansion": expansion,
+        # where the expansion came from the crimp the fabric needs: loose, target, strain
+        "crimp_targets": crimp.crimp_targets(loose) or None,
         "time_step_s": plan.time_step_s,
         "ramp_steps": ramp,
         "steps": steps,

@@ -11,7 +11,10 @@ bracket), all families at once, until every family is within ``tolerance`` of it
 (default 5 %) or ``max_runs`` (8) crimp runs are spent (then it warns and keeps the
 closest). Every run overwrites the crimp folder; the last one stays, and its
 ``summary.json`` → ``tension_search`` lists the expansions tried and the tensions they
-gave.
+gave. A family also given ``target_crimp_pct = "auto"`` never shrinks beyond that
+strain (its loose crimp less the margin, :mod:`fabmd.protocols.crimp_target`): a tension
+the fabric only carries with the yarns pulled straighter is not reached, and the search
+says so (``shrink_bound``, ``at_bound``) instead of pulling them into zig-zags.
 """
 
 from __future__ import annotations
@@ -93,12 +96,13 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     targets = target_tensions_n(crimp.target_tension, model)
     fams = sorted(targets)
     stiffness = {f: yarn_axial_stiffness_n(model, f) for f in fams}
-    expansion = {f: float(crimp.expansion.get(f, 0.0)) for f in fams}
+    bound = shrink_bounds(crimp, model, fams)
+    expansion = {f: float(max(crimp.expansion.get(f, 0.0), bound.get(f, -1.0)))
+                 for f in fams}
     tried: list[dict] = []
     best = None
     for run in range(max_runs):
-        stage = dataclasses.replace(crimp, target_tension=None,
-                                    expansion={**crimp.expansion, **expansion})
+        stage = _stage(crimp, fams, expansion)
         result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0)
         got = {f: result.summary["yarn_tension"][f]["yarn_n"] for f in fams}
         error = max(abs(got[f] / targets[f] - 1) for f in fams)
@@ -119,7 +123,7 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
             step[f] = (targets[f] - got[f]) / slope
         new = {}
         for f in fams:
-            e = float(np.clip(expansion[f] + step[f], -0.45, 0.45))
+            e = float(np.clip(expansion[f] + step[f], bound.get(f, -0.45), 0.45))
             # once the target is bracketed (tension falls as the expansion rises), stay
             # inside the bracket: bisect where the secant would leave it (the response
             # turns steep where slack yarns go taut)
@@ -130,21 +134,48 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
                 if not lo < e < hi:
                     e = 0.5 * (lo + hi)
             new[f] = e
+        if new == expansion:  # every family held at its shrink bound: nothing left to try
+            break
         expansion = new
     error, result = best
+    at_bound = sorted(f for f in bound if tried[-1]["expansion"][f] <= bound[f]
+                      and tried[-1]["yarn_tension_n"][f] < targets[f])
     search = {"targets_n": targets, "tolerance": tolerance, "runs": tried,
-              "reached": error <= tolerance}
+              "reached": error <= tolerance, "shrink_bound": bound or None,
+              "at_bound": at_bound}
     if error > tolerance:
         if tried[-1]["largest_relative_error"] != error:  # rerun the closest for the folder
             closest = next(t for t in tried if t["largest_relative_error"] == error)
-            result = dataclasses.replace(crimp, target_tension=None, expansion={
-                **crimp.expansion, **closest["expansion"]}).run(model, out, engine=engine,
-                                                                overwrite=True)
+            result = _stage(crimp, fams, closest["expansion"]).run(model, out, engine=engine,
+                                                                  overwrite=True)
+        why = (f"; {', '.join(at_bound)} at the \"auto\" shrink bound (more tension would "
+               f"pull them straighter than the margin allows)" if at_bound else "")
         warnings.warn(f"crimp: the yarn tension did not reach its target within "
-                      f"{100 * tolerance:g} % in {max_runs} runs (closest: "
-                      f"{100 * error:.1f} % off); see summary.json tension_search",
+                      f"{100 * tolerance:g} % in {len(tried)} runs (closest: "
+                      f"{100 * error:.1f} % off){why}; see summary.json tension_search",
                       stacklevel=3)
     result.summary["tension_search"] = search
     if mpi.is_root():
         write_json(Path(result.run_dir) / "summary.json", result.summary)
     return result
+
+
+def shrink_bounds(crimp, model: BeadModel, fams) -> dict[str, float]:
+    """The lowest strain per family of ``fams`` that ``target_crimp_pct = "auto"`` allows
+    (its loose crimp less the margin); families without "auto" are not bounded here."""
+    auto = {f: v for f, v in crimp.target_crimp_pct.items() if isinstance(v, str)
+            and f in fams}
+    if not auto:
+        return {}
+    from .crimp_target import derive_expansion
+
+    derived = derive_expansion(model, auto, crimp.auto_margin_pct)
+    return {f: derived[f]["expansion"] for f in auto}
+
+
+def _stage(crimp, fams, expansion: dict[str, float]):
+    """One run of the search: the tension families at ``expansion``, their "auto" bound
+    (kept by the search) taken out of the crimp targets."""
+    return dataclasses.replace(
+        crimp, target_tension=None, expansion={**crimp.expansion, **expansion},
+        target_crimp_pct={f: v for f, v in crimp.target_crimp_pct.items() if f not in fams})
