@@ -446,19 +446,29 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--repeat", type=int, default=2, help="1-and-2-rank pairs")
     p.add_argument("--project-only", action="store_true",
                    help="no runs: project from the saved measurements")
+    p.add_argument("--targets-only", action="store_true",
+                   help="no runs: derive the targets (Python only; minutes for 3D coupons)")
     p.add_argument("--json", type=Path, default=JSON)
     p.add_argument("--write", action="store_true", help="RESULTS.md section")
     args = p.parse_args(argv)
 
     data = json.loads(args.json.read_text()) if args.json.exists() else {}
-    if not args.project_only:
+    scene = str(Path(args.scene).resolve().relative_to(ROOT))
+    if args.targets_only or data.get("targets_scene") != scene:
+        print("targets at one fibre per yarn (no LAMMPS) ...", flush=True)
+        data["targets"] = targets(ROOT / scene)
+        data["targets_scene"] = scene
+        args.json.write_text(json.dumps(data, indent=1) + "\n")
+        if args.targets_only:
+            return 0
+    if not (args.project_only or args.targets_only):
         root = Path(tempfile.mkdtemp(prefix="fabmd-cluster-"))
         folder, piece, crimp_s = measured_piece(args.scene, tuple(args.cells), args.steps,
                                                 root)
         print(f"piece: {piece.n_beads:,} beads (crimp {crimp_s:.0f} s), {args.steps} steps",
               flush=True)
         data["measured"] = {
-            "scene": str(Path(args.scene).resolve().relative_to(ROOT)),
+            "scene": scene,
             "cells": list(args.cells), "steps": args.steps, "crimp_s": crimp_s,
             "sheet": dataclasses.asdict(sheet_of(piece)),
             "pairs": []}
@@ -468,11 +478,6 @@ def main(argv: list[str] | None = None) -> int:
             args.json.write_text(json.dumps(data, indent=1) + "\n")
     if "measured" not in data:
         raise SystemExit(f"no measurements in {args.json}: run without --project-only")
-    if data.get("targets_scene") != data["measured"]["scene"] or "targets" not in data:
-        print("targets at one fibre per yarn (no LAMMPS) ...", flush=True)
-        data["targets"] = targets(ROOT / data["measured"]["scene"])
-        data["targets_scene"] = data["measured"]["scene"]
-        args.json.write_text(json.dumps(data, indent=1) + "\n")
     body, rows = report(data)
     print(table(PROJECTION_HEADER, rows))
     if args.write:

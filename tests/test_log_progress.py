@@ -96,3 +96,17 @@ def test_an_interrupted_wait_stops_lmp(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         follow(lmp, LogSteps(lmp.path), 100, lambda done, total: None, poll_s=0)
     assert lmp.polls == 1  # terminated, then waited for
+
+
+def test_a_stage_that_ends_at_its_first_report_shows_its_mean_speed_once(monkeypatch):
+    """Seen on `fabmd test tension --fast`: the coupon's relaxation stopped inside its first
+    chunk and its line said '0 steps/s' twice."""
+    clock = iter([0.0, 2.0, 3.0])
+    monkeypatch.setattr("fabmd.progress.time.perf_counter", lambda: next(clock))
+    stream = io.StringIO()
+    bar = Progress("coupon", stream=stream, enabled=True, min_interval_s=0)
+    bar(1500, 1500)
+    bar(1500, 1500)  # the end reported again (by the chunk, then by its run command)
+    text = stream.getvalue()
+    assert text.count("coupon: step 1500/1500") == 1 and text.endswith("\n")
+    assert "1 rank  750 steps/s" in text and "left 0:00:00" in text
