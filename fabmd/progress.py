@@ -23,8 +23,8 @@ class Progress:
 
     The speed is measured from the first call on (so a resumed run, which starts at its
     checkpoint's step, shows its own speed; none is shown before the second call, except
-    on the last line of a stage that ended at its first call: the steps over the time
-    since the line was made); the time left is the steps left at that speed. The last
+    on the last line of a stage that ended before a speed was measured: the steps over
+    the time since the line was made); the time left is the steps left at that speed. The last
     line is drawn once, however often the end is reported.
 
     Args:
@@ -65,8 +65,8 @@ class Progress:
         rate = self.rate(step, now)
         if self._first is None:
             self._first = (now, step)
-            if step >= total and now > self._t0:  # ended at once: the mean speed
-                rate = step / (now - self._t0)
+        if rate == 0 and step >= total and now > self._t0:  # ended before a speed: the mean
+            rate = step / (now - self._t0)
         if step < total and now - self._last < self.min_interval_s:
             return
         self._last = now

@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from fabmd.engine.log_progress import LogSteps
+from fabmd.engine.log_progress import LogSteps, planned_runs
 from fabmd.engine.standalone import follow
 from fabmd.progress import Progress
 
@@ -34,7 +34,15 @@ def test_steps_done_count_closed_runs_and_the_open_one(tmp_path):
     assert log.feed(RUN_1) == 2000
     assert log.feed(RUN_2 + "      15") == 2500  # a row LAMMPS is still writing waits
     assert log.feed("00   1.5e-05     1e-9\n") == 3500
+    assert log.total([2000, 50_000, 9000]) == 2000 + 50_000 + 9000  # the second run is open
     assert log.feed("Loop time of 0.1 on 2 procs for 1200 steps with 640 atoms\n") == 3200
+    assert log.total([2000, 50_000, 9000]) == 2000 + 1200 + 9000  # it halted at 1200
+
+
+def test_every_run_command_is_planned():
+    commands = ["units si", "run 50000", "run 2000 start 0 stop 9000 pre yes post no",
+                "run 0 pre no post no", "variable run equal 3"]
+    assert planned_runs(commands) == [50_000, 2000, 0]
 
 
 def test_steps_are_read_as_the_log_grows(tmp_path):
@@ -74,7 +82,7 @@ def test_the_standalone_line_shows_ranks_steps_per_second_and_time_left(tmp_path
     stream = io.StringIO()
     bar = Progress("tension", stream=stream, enabled=True, min_interval_s=0, ranks=2)
     lmp = FakeLmp(tmp_path / "log.lammps", [0, 1000, 3000, 5000])
-    assert follow(lmp, LogSteps(lmp.path), 9000, bar, poll_s=0) == 0
+    assert follow(lmp, LogSteps(lmp.path), [9000], bar, poll_s=0) == 0
     lines = stream.getvalue().split("\r")[1:]
     # the first logged step starts the clock: set-up time is not in the speed
     assert lines[0].startswith("tension: step 1000/9000") and "-:--:--" in lines[0]
@@ -94,7 +102,7 @@ def test_an_interrupted_wait_stops_lmp(tmp_path):
 
     lmp = Stuck(tmp_path / "log.lammps", [0])
     with pytest.raises(KeyboardInterrupt):
-        follow(lmp, LogSteps(lmp.path), 100, lambda done, total: None, poll_s=0)
+        follow(lmp, LogSteps(lmp.path), [100], lambda done, total: None, poll_s=0)
     assert lmp.polls == 1  # terminated, then waited for
 
 
@@ -110,3 +118,14 @@ def test_a_stage_that_ends_at_its_first_report_shows_its_mean_speed_once(monkeyp
     text = stream.getvalue()
     assert text.count("coupon: step 1500/1500") == 1 and text.endswith("\n")
     assert "1 rank  750 steps/s" in text and "left 0:00:00" in text
+
+
+def test_a_relaxation_that_stops_in_its_first_chunk_ends_with_its_mean_speed(monkeypatch):
+    clock = iter([0.0, 1.0, 2.0])
+    monkeypatch.setattr("fabmd.progress.time.perf_counter", lambda: next(clock))
+    stream = io.StringIO()
+    bar = Progress("coupon", stream=stream, enabled=True, min_interval_s=0)
+    bar(1500, 100_000)  # the first chunk: the relaxation's whole budget ahead
+    bar(1500, 1500)  # it stopped there: the budget shrinks to the steps run
+    last = stream.getvalue().split("\r")[-1]
+    assert "coupon: step 1500/1500  100.0 %  1 rank  750 steps/s" in last

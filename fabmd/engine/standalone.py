@@ -12,8 +12,8 @@ from pathlib import Path
 
 from .diagnosis import to_exception
 from .library import engine_environment, lmp_executable, mpirun_executable
-from .log_progress import LogSteps
-from .script import logical_lines, total_run_steps
+from .log_progress import LogSteps, planned_runs
+from .script import logical_lines
 
 #: seconds between two looks at the log of a running ``lmp`` (progress)
 POLL_S = 0.5
@@ -35,7 +35,8 @@ def run_standalone(run_dir: Path, input_name: str, *, ranks: int = 1, threads: i
 
     Screen output goes to ``run_dir/screen.log``. ``progress(step, total)`` (e.g. a
     :class:`fabmd.progress.Progress`) is called every :data:`POLL_S` seconds with the
-    steps LAMMPS has logged (``lmp -nb``: the log unbuffered) and once at the end.
+    steps LAMMPS has written there (``lmp -nb`` leaves the screen output unbuffered; the
+    log file stays buffered) and once at the end.
 
     Raises:
         SimulationFailed / UnstableRun: ``lmp`` exited with an error.
@@ -50,21 +51,20 @@ def run_standalone(run_dir: Path, input_name: str, *, ranks: int = 1, threads: i
             returncode = subprocess.run(cmd, cwd=run_dir, env=env, stdout=out,
                                         stderr=subprocess.STDOUT, check=False).returncode
         else:
-            (run_dir / "log.lammps").unlink(missing_ok=True)  # no steps of an older run
-            total = total_run_steps(logical_lines((run_dir / input_name).read_text()))
+            planned = planned_runs(logical_lines((run_dir / input_name).read_text()))
             proc = subprocess.Popen(cmd + ["-nb"], cwd=run_dir, env=env, stdout=out,
                                     stderr=subprocess.STDOUT)
-            returncode = follow(proc, LogSteps(run_dir / "log.lammps"), total, progress)
+            returncode = follow(proc, LogSteps(screen), planned, progress)
     text = screen.read_text(errors="replace")
     if returncode != 0 or "ERROR" in text:
         raise to_exception(text, run_dir)
 
 
-def follow(proc, log: LogSteps, total: int, progress: Callable[[int, int], None],
+def follow(proc, log: LogSteps, planned: list[int], progress: Callable[[int, int], None],
            poll_s: float = POLL_S) -> int:
-    """Wait for ``proc``, calling ``progress(steps done, total)`` from its log meanwhile;
-    at a clean end once more with the steps it ran as the total (a run that a ``fix
-    halt`` ended early ends its line there). Returns the exit status; stops ``proc``
+    """Wait for ``proc``, calling ``progress(steps done, steps in all)`` from its output
+    meanwhile (``planned``: the steps of the input's runs; :meth:`LogSteps.total`), at a
+    clean end once more with the steps it ran. Returns the exit status; stops ``proc``
     when this Python is interrupted."""
     shown = 0
     try:
@@ -73,15 +73,15 @@ def follow(proc, log: LogSteps, total: int, progress: Callable[[int, int], None]
                 returncode = proc.wait(timeout=poll_s)
                 break
             except subprocess.TimeoutExpired:
-                done = min(log.read(), total)
+                done = log.read()
                 if done > shown:  # from the first logged steps on: the speed leaves set-up out
-                    progress(done, total)
+                    progress(done, max(done, log.total(planned)))
                     shown = done
     except BaseException:
         proc.terminate()
         proc.wait()
         raise
     if returncode == 0:
-        done = min(log.read(), total)
+        done = log.read()
         progress(done, done)
     return returncode
