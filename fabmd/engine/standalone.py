@@ -15,7 +15,7 @@ from .library import engine_environment, lmp_executable, mpirun_executable
 from .log_progress import LogSteps, planned_runs
 from .script import logical_lines
 
-#: seconds between two looks at the log of a running ``lmp`` (progress)
+#: seconds between two looks at the output of a running ``lmp`` (progress)
 POLL_S = 0.5
 
 
