@@ -4,7 +4,7 @@ ranks measured here.
 Measure. The method paper's 3D fabric (``examples/through_thickness_3d.toml``) at one
 virtual fibre per yarn: its periodic cell crimped as the scene says, tiled to a piece
 (default 5 × 2 cells, 120 × 40 mm), and the tension input fabmd writes for it (no free
-relaxation; the single ``run`` cut to a fixed number of steps) run by ``lmp -in`` on 1
+relaxation: ``run 0``; the loading run cut to a fixed number of steps) run by ``lmp -in`` on 1
 and on 2 MPI ranks back to back. From LAMMPS's log: loop time, the "MPI task timing
 breakdown" (Pair, Bond, Neigh, Comm, Output, Modify, Other: average seconds and % of the
 loop) and the ghost beads per rank (``Nghost``).
@@ -73,13 +73,13 @@ _HIST = re.compile(r"^(Nlocal|Nghost|Neighs):\s+(\S+) ave\s+(\S+) max\s+(\S+) mi
 
 
 def timing_breakdown(log_text: str) -> dict:
-    """The last run of a LAMMPS log: loop time [s], ranks, steps, atoms, the "MPI task
+    """The longest run of a LAMMPS log: loop time [s], ranks, steps, atoms, the "MPI task
     timing breakdown" (per section: average seconds ``avg_s`` and ``pct`` of the loop),
     LAMMPS's CPU use [%] and the Nlocal/Nghost/Neighs averages and maxima per rank."""
     loops = list(_LOOP.finditer(log_text))
     if not loops:
         raise ValueError("no 'Loop time of' line: the run did not finish")
-    last = loops[-1]
+    last = max(loops, key=lambda m: int(m.group(3)))  # not a closing 'run 0
     out = {"loop_s": float(last.group(1)), "ranks": int(last.group(2)),
            "steps": int(last.group(3)), "atoms": int(last.group(4)), "sections": {}}
     tail = log_text[last.end():]
@@ -87,7 +87,7 @@ def timing_breakdown(log_text: str) -> dict:
     out["cpu_use_pct"] = float(cpu.group(1)) if cpu else None
     head = tail.find("MPI task timing breakdown")
     if head < 0:
-        raise ValueError("no 'MPI task timing breakdown' after the last loop")
+        raise ValueError("no 'MPI task timing breakdown' after the longest run")
     for line in tail[head:].splitlines()[3:]:
         m = _ROW.match(line)
         if not m:
@@ -111,11 +111,14 @@ def with_fibres(scene, n: int):
 
 
 def fixed_steps(text: str, steps: int) -> str:
-    """The input with its one plain ``run N`` cut to ``run steps``."""
-    runs = re.findall(r"^run\s+\d+\s*$", text, re.M)
-    if len(runs) != 1:
-        raise ValueError(f"expected one plain run in the input, found {len(runs)}")
-    return re.sub(r"^run\s+\d+\s*$", f"run             {steps}", text, flags=re.M)
+    """The input with its last plain ``run N`` (the loading) cut to ``run steps`` and the
+    plain runs before it (a free relaxation) to ``run 0``."""
+    plain = re.compile(r"^run\s+\d+\s*$", re.M)
+    count = len(plain.findall(text))
+    if not count:
+        raise ValueError("no plain run in the input")
+    seen = iter(range(count))
+    return plain.sub(lambda _m: f"run {steps if next(seen) == count - 1 else 0}", text)
 
 
 def measured_piece(scene_path: Path, cells: tuple[int, int], steps: int, root: Path):
@@ -132,8 +135,7 @@ def measured_piece(scene_path: Path, cells: tuple[int, int], steps: int, root: P
                                      engine=Engine(progress=False), overwrite=True).model
     crimp_s = time.perf_counter() - t0
     piece = tile(crimped, *cells, periodic=False)
-    tension = dataclasses.replace(protocol_stage(scene, "tension"), relax=None)
-    text = fixed_steps(tension.input_text(piece), steps)
+    text = fixed_steps(protocol_stage(scene, "tension").input_text(piece), steps)
     folder = write_run_folder(root / "piece", "tension", piece, text, {}, overwrite=True)
     return folder, piece, crimp_s
 

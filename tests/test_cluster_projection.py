@@ -50,7 +50,8 @@ def bench():
 
 def test_the_timing_breakdown_of_the_last_run_is_read(bench):
     first = LOG.replace("43.7277 on 2 procs for 2000", "1.0 on 2 procs for 10")
-    got = bench.timing_breakdown(first + "\n" + LOG)
+    closing = "Loop time of 0.001 on 2 procs for 0 steps with 16384 atoms\n"
+    got = bench.timing_breakdown(first + "\n" + LOG + closing)
     assert (got["loop_s"], got["ranks"], got["steps"], got["atoms"]) == (43.7277, 2, 2000, 16384)
     assert set(got["sections"]) == set(bench.SECTIONS)
     assert got["sections"]["Comm"] == {"avg_s": 16.022, "pct": 36.64}
@@ -59,6 +60,12 @@ def test_the_timing_breakdown_of_the_last_run_is_read(bench):
     assert got["nlocal"]["ave"] == 8192.0 and got["cpu_use_pct"] == 21.1
     with pytest.raises(ValueError, match="did not finish"):
         bench.timing_breakdown("Step Time\n 0 0\n")
+
+
+def test_the_loading_run_is_cut_and_the_relaxation_skipped(bench):
+    text = "fix a all nve\nrun 50000\nunfix a\nrun             53868\nrun 0 pre no post no\n"
+    assert bench.fixed_steps(text, 6000) == (
+        "fix a all nve\nrun 0\nunfix a\nrun 6000\nrun 0 pre no post no\n")
 
 
 def test_a_sheet_is_cut_across_its_length_and_then_into_patches(bench):
