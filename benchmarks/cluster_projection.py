@@ -330,7 +330,10 @@ def at_fibres(target: dict, n: int) -> tuple[Sheet, int]:
 
 def projection_rows(model: CostModel, target_list: list[dict]) -> list[list]:
     """One row per target and fibre count: beads, steps, core-hours on one rank, ranks at
-    ≥ 70 % efficiency, their efficiency, wall time and core-hours, beads per rank."""
+    ≥ 70 % efficiency, their efficiency, wall time and core-hours, beads per rank, and the
+    ranks a run folder's ``slurm.sh`` asks for (:func:`fabmd.protocols.common.slurm_ranks`)."""
+    from fabmd.protocols.common import slurm_ranks
+
     rows = []
     for target in target_list:
         for n in FIBRES:
@@ -341,7 +344,7 @@ def projection_rows(model: CostModel, target_list: list[dict]) -> list[list]:
             rows.append([target["name"], n, f"{sheet.beads:,.0f}", f"{steps:,}",
                          _hours(steps * t1), p, f"{100 * t1 / (p * tp):.0f} %",
                          _clock(steps * tp), _hours(p * steps * tp),
-                         f"{sheet.beads / p:,.0f}"])
+                         f"{sheet.beads / p:,.0f}", slurm_ranks(round(sheet.beads))])
     return rows
 
 
@@ -360,7 +363,7 @@ def _clock(seconds: float) -> str:
 # ---- report ----------------------------------------------------------------------------
 PROJECTION_HEADER = ["target", "fibres per yarn", "beads", "steps", "core-hours on 1 rank",
                      "ranks at >= 70 %", "efficiency", "wall time", "core-hours",
-                     "beads per rank"]
+                     "beads per rank", "slurm.sh asks"]
 
 
 def breakdown_rows(pairs: list[dict]) -> list[list]:
