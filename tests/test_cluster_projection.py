@@ -95,16 +95,28 @@ def test_ranks_are_the_largest_count_at_the_efficiency(bench):
     assert min(bench.ghosts(sheet, free)[1], 1.0) >= 4 * sheet.ghost_width_m
 
 
-def test_the_fit_reproduces_the_measured_pair(bench):
+def run(loop, ghosts, comm, steps=1000, atoms=20_000):
+    return {"loop_s": loop, "steps": steps, "atoms": atoms, "nghost": {"ave": ghosts},
+            "sections": {"Comm": {"avg_s": comm, "pct": 0.0}}}
+
+
+def test_the_two_rank_fit_reproduces_the_measured_pair(bench):
     sheet = bench.Sheet(beads=20_000, lx_m=0.12, ly_m=0.04, ghost_width_m=0.001)
-
-    def run(loop, ghosts, comm):
-        return {"loop_s": loop, "steps": 1000, "atoms": 20_000, "nghost": {"ave": ghosts},
-                "sections": {"Comm": {"avg_s": comm, "pct": 0.0}}}
-
-    model = bench.fit({"1": run(10.0, 0, 0.01), "2": run(6.0, 400, 0.5)}, sheet)
+    model = bench.fit_two_ranks({"1": run(10.0, 0, 0.01), "2": run(6.0, 400, 0.5)}, sheet)
     assert bench.step_time_s(model, sheet, 1) == pytest.approx(10.0 / 1000)
     assert bench.step_time_s(model, sheet, 2) == pytest.approx(6.0 / 1000)
+    assert bench.ghosts(sheet, 2, model.ghost_factor)[0] == pytest.approx(400)
+
+
+def test_the_ghost_cost_comes_from_the_periodic_copy_on_one_rank(bench):
+    sheet = bench.Sheet(beads=20_000, lx_m=0.12, ly_m=0.04, ghost_width_m=0.001)
+    pair = {"1": run(10.0, 0, 0.01), "2": run(9.0, 400, 4.0),  # 2 ranks: loaded, waiting
+            "plain": run(4.0, 0, 0.01, steps=500), "periodic": run(4.5, 2000, 0.2, steps=500)}
+    model = bench.fit(pair, sheet)
+    assert model.alpha_s == pytest.approx(10.0 / (1000 * 20_000))
+    assert model.beta_s == pytest.approx(0.5 / (500 * 2000))  # the loop difference
+    pair["periodic"] = run(4.1, 2000, 0.2, steps=500)  # less than its Comm: the Comm
+    assert bench.fit(pair, sheet).beta_s == pytest.approx(0.2 / (500 * 2000))
     assert bench.ghosts(sheet, 2, model.ghost_factor)[0] == pytest.approx(400)
 
 
