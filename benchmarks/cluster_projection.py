@@ -10,11 +10,12 @@ on the piece cut open and on the same tiles periodic, one rank each. From LAMMPS
 loop time, the "MPI task timing breakdown" (Pair, Bond, Neigh, Comm, Output, Modify,
 Other: average seconds and % of the loop) and the ghost beads per rank (``Nghost``).
 
-Model (stated, fitted to those two points; nothing else is measured):
+Model (stated; fitted to those runs, except λ):
 
-* per step on ``P`` ranks, t(P) = α·N/P + β·g(P): α the 1-rank cost per bead-step (every
-  section, its own Comm included), β the cost per ghost bead-step, g(P) the ghost beads
-  of the busiest rank;
+* per step on ``P`` ranks, t(P) = α·N/P + β·g(P) + λ (λ only for P > 1): α the 1-rank
+  cost per bead-step of the tension input (every section, its own Comm included), β the
+  cost per ghost bead-step, g(P) the ghost beads of the busiest rank; α and β in CPU
+  time (loop × LAMMPS's "CPU use"), so that other jobs' share of the cores is left out;
 * β from one rank as well, so that other jobs on the machine do not enter it as waiting:
   the same tiles made periodic cost more than cut open (LAMMPS copies ghost beads across
   the periodic faces every step), per ghost bead-step (at least the Comm section); the
@@ -32,10 +33,9 @@ Model (stated, fitted to those two points; nothing else is measured):
 * ranks: the largest P (1, 2, 3, 4, 6, 8, 12, …) with parallel efficiency
   t(1)/(P·t(P)) ≥ 70 % and patches at least 4 w wide.
 
-It is a projection from 1–2 ranks on one shared-memory node: the latency of many-rank
-messages, a network between nodes, load imbalance beyond a halving and many-rank
-reductions are not measured; read the rank counts as an upper bound, the core-hours as
-a lower bound.
+It is a projection from 1–2 ranks on one shared-memory node: message latency (assumed),
+a network between nodes, load imbalance and many-rank reductions are not measured; read
+the rank counts as an upper bound, the core-hours as a lower bound.
 
     python benchmarks/cluster_projection.py [--cells 5 2] [--steps 6000] [--repeat 2]
     python benchmarks/cluster_projection.py --project-only --write   # from the saved JSON
@@ -241,16 +241,25 @@ def ghosts(sheet: Sheet, ranks: int, factor: float = 1.0) -> tuple[float, float]
     return best
 
 
+def cpu_s(run: dict, seconds: float | None = None) -> float:
+    """``seconds`` of a one-rank run (default its loop) times LAMMPS's CPU use: the time
+    on a core of its own, without the other jobs' share of the machine."""
+    share = (run.get("cpu_use_pct") or 100.0) / 100.0
+    return (run["loop_s"] if seconds is None else seconds) * min(1.0, share)
+
+
 def fit(pair: dict, sheet: Sheet) -> CostModel:
     """α from the tension input on one rank; β from one rank too: what the periodic
     copy of the piece costs more than the cut-open one, per ghost bead-step (at least
     its Comm; LAMMPS's own ghost exchange without MPI messages, so waiting and message
-    latency are left out); c from the 2-rank run's measured Nghost."""
+    latency are left out); both in CPU time (:func:`cpu_s`); c from the 2-rank run's
+    measured Nghost."""
     one, two = pair["1"], pair["2"]
     plain, periodic = pair["plain"], pair["periodic"]
-    extra = max(periodic["loop_s"] - plain["loop_s"], periodic["sections"]["Comm"]["avg_s"])
+    extra = max(cpu_s(periodic) - cpu_s(plain),
+                cpu_s(periodic, periodic["sections"]["Comm"]["avg_s"]))
     beta = extra / (periodic["steps"] * periodic["nghost"]["ave"])
-    return CostModel(alpha_s=one["loop_s"] / (one["steps"] * one["atoms"]), beta_s=beta,
+    return CostModel(alpha_s=cpu_s(one) / (one["steps"] * one["atoms"]), beta_s=beta,
                      ghost_factor=two["nghost"]["ave"] / ghosts(sheet, 2)[0])
 
 
@@ -467,7 +476,9 @@ developers' jobs: the 1-minute load average before each run is given (idle: belo
 
 {fit_lines}
 
-t(P) = α·N/P + β·g(P) per step: α the tension input's cost per bead-step on one rank; β
+t(P) = α·N/P + β·g(P) + λ per step, in CPU time (loop × LAMMPS's "CPU use" of the
+one-rank runs, so that the other jobs' share of the cores is left out): α the tension
+input's cost per bead-step on one rank; β
 what a ghost bead costs per step, from one rank (the periodic tiles against the cut-open
 piece, at least their Comm), so that the other jobs' load does not enter as the ranks
 waiting for each other; g(P) = c·σ·w·(inner patch edges) for the px × py split of the
