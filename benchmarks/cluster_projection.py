@@ -25,7 +25,7 @@ Model (stated; fitted to those runs, except λ):
   neighbour check's all-reduce cannot be measured on a shared 2-core machine);
 * LAMMPS cuts a sheet into px × py patches (px·py = P, the split with the fewest ghosts);
   a patch's ghosts lie within the ghost cutoff w of its inner edges: g = c·σ·w·(edges'
-  length), σ = N / sheet area, c fitted so that g(2) equals the measured Nghost;
+  length), σ = N / sheet area, c fitted to the periodic run's Nghost (its whole rim);
 * fibres per yarn n: beads ∝ n·d(1)/d(n) per family (d ∝ 1/√n, same s/d), w ∝ d, α and β
   unchanged per bead; steps = the plan at one fibre (fabmd's own ``plan()`` on the real
   target) × dt(1)/dt(n) (``stable_time_step_s`` of the n-fibre beads; duration and wave
@@ -252,15 +252,22 @@ def fit(pair: dict, sheet: Sheet) -> CostModel:
     """α from the tension input on one rank; β from one rank too: what the periodic
     copy of the piece costs more than the cut-open one, per ghost bead-step (at least
     its Comm; LAMMPS's own ghost exchange without MPI messages, so waiting and message
-    latency are left out); both in CPU time (:func:`cpu_s`); c from the 2-rank run's
-    measured Nghost."""
-    one, two = pair["1"], pair["2"]
-    plain, periodic = pair["plain"], pair["periodic"]
+    latency are left out); both in CPU time (:func:`cpu_s`); c from the periodic run's
+    Nghost over its whole perimeter (a single cut, as on 2 ranks, may fall between weft
+    columns)."""
+    one, plain, periodic = pair["1"], pair["plain"], pair["periodic"]
     extra = max(cpu_s(periodic) - cpu_s(plain),
                 cpu_s(periodic, periodic["sections"]["Comm"]["avg_s"]))
     beta = extra / (periodic["steps"] * periodic["nghost"]["ave"])
+    rim = sheet.density_per_m2 * sheet.ghost_width_m * 2 * (sheet.lx_m + sheet.ly_m)
     return CostModel(alpha_s=cpu_s(one) / (one["steps"] * one["atoms"]), beta_s=beta,
-                     ghost_factor=two["nghost"]["ave"] / ghosts(sheet, 2)[0])
+                     ghost_factor=periodic["nghost"]["ave"] / rim)
+
+
+def fit_bare_alpha(pair: dict) -> float:
+    """CPU seconds per bead-step of the bare input, cut open (beads, bonds, contact)."""
+    plain = pair["plain"]
+    return cpu_s(plain) / (plain["steps"] * plain["atoms"])
 
 
 def fit_two_ranks(pair: dict, sheet: Sheet) -> CostModel:
@@ -393,8 +400,16 @@ def projection_rows(model: CostModel, target_list: list[dict]) -> list[list]:
             rows.append([target["name"], n, f"{sheet.beads:,.0f}", f"{steps:,}",
                          _hours(steps * t1), p, f"{100 * t1 / (p * tp):.0f} %",
                          _clock(steps * tp), _hours(p * steps * tp),
-                         f"{sheet.beads / p:,.0f}", slurm_ranks(round(sheet.beads))])
+                         f"{sheet.beads / p:,.0f}", _at(model, sheet, steps,
+                                                         slurm_ranks(round(sheet.beads)))])
     return rows
+
+
+def _at(model: CostModel, sheet: Sheet, steps: int, ranks: int) -> str:
+    """``ranks`` with their projected efficiency and wall time."""
+    tp = step_time_s(model, sheet, ranks)
+    efficiency = step_time_s(model, sheet, 1) / (ranks * tp)
+    return f"{ranks} ({100 * efficiency:.0f} %, {_clock(steps * tp)})"
 
 
 def _hours(seconds: float) -> str:
@@ -412,7 +427,7 @@ def _clock(seconds: float) -> str:
 # ---- report ----------------------------------------------------------------------------
 PROJECTION_HEADER = ["target", "fibres per yarn", "beads", "steps", "core-hours on 1 rank",
                      "ranks at >= 70 %", "efficiency", "wall time", "core-hours",
-                     "beads per rank", "slurm.sh asks"]
+                     "beads per rank", "slurm.sh asks (efficiency, wall)"]
 
 
 def breakdown_rows(pairs: list[dict]) -> list[list]:
@@ -433,7 +448,7 @@ def breakdown_rows(pairs: list[dict]) -> list[list]:
 
 
 def chosen_pair(pairs: list[dict]) -> int:
-    """The pair measured at the lowest load (the nearest to a dedicated node)."""
+    """The set measured at the lowest load (the nearest to a dedicated node)."""
     return min(range(len(pairs)), key=lambda k: pairs[k]["1"]["load_before"]
                + pairs[k]["2"]["load_before"])
 
@@ -453,7 +468,8 @@ def report(data: dict) -> tuple[str, list[list]]:
         loaded = fit_two_ranks(pair, sheet)
         lines.append(
             f"- set {j + 1}: α = {f.alpha_s * 1e9:.3g} ns per bead-step, β = "
-            f"{f.beta_s * 1e9:.3g} ns per ghost bead-step, c = {f.ghost_factor:.3g}; "
+            f"{f.beta_s * 1e9:.3g} ns per ghost bead-step, c = {f.ghost_factor:.3g} "
+            f"(the 2-rank cut: {loaded.ghost_factor:.3g}); "
             f"2 ranks: {measured:.2f}× faster measured, {predicted:.2f}× by the model "
             f"(β from the 2-rank run itself: {loaded.beta_s * 1e9:.3g} ns, "
             f"{ranks_at_efficiency(loaded, sheet)} rank(s) at 70 % on this piece)"
@@ -464,7 +480,9 @@ Measured on `{m['scene']}` at one virtual fibre per yarn: the periodic cell crim
 scene says, tiled {m['cells'][0]} × {m['cells'][1]} cells ({sheet.lx_m * 1e3:.0f} ×
 {sheet.ly_m * 1e3:.0f} mm, {sheet.beads:,.0f} beads, not periodic), fabmd's tension input
 for it without the free relaxation, its run cut to {m['steps']:,} steps; `lmp -in` on 1
-then 2 MPI ranks back to back, repeated. The machine (2 cores) was shared with the other
+then 2 MPI ranks, then a bare input (beads, bonds, contact, guards; {m['steps'] // 2:,}
+steps) on the piece cut open and on the same tiles periodic, one rank each; all back to
+back, the set repeated. The machine (2 cores) was shared with the other
 developers' jobs: the 1-minute load average before each run is given (idle: below 1).
 
 ### LAMMPS's timing breakdown (average over ranks: seconds, % of the loop)
@@ -472,37 +490,55 @@ developers' jobs: the 1-minute load average before each run is given (idle: belo
 {table(["run", "load", "wall [s]", "loop [s]", *SECTIONS, "ghosts per rank"],
        breakdown_rows(m['pairs']))}
 
-### Model, fitted to the pairs
+### Model, fitted to each set
 
 {fit_lines}
 
-t(P) = α·N/P + β·g(P) + λ per step, in CPU time (loop × LAMMPS's "CPU use" of the
-one-rank runs, so that the other jobs' share of the cores is left out): α the tension
-input's cost per bead-step on one rank; β
-what a ghost bead costs per step, from one rank (the periodic tiles against the cut-open
-piece, at least their Comm), so that the other jobs' load does not enter as the ranks
-waiting for each other; g(P) = c·σ·w·(inner patch edges) for the px × py split of the
-sheet with the fewest ghosts, σ beads per area, w the ghost cutoff, c from the 2-rank
-run's Nghost; λ = {LATENCY_S * 1e6:.0f} µs per step on more than one rank, **assumed**
-(about 10 ghost messages and one all-reduce a step at 1–3 µs each; not measurable on
-this machine) — it is what limits the ranks of the small models. Steps from
-fabmd's own plan at one fibre on the real target (`plan()`: time step, loading speed,
-travel) × dt(1)/dt(n), plus the relaxation budgets (crimp: a quarter of its budget, as
-its plan expects; coupons: the coupon's and the test's free relaxations, which stop
-once quasi-static — upper bounds). Beads at n fibres: × n·d(1)/d(n) per family.
+t(P) = α·N/P + β·g(P) + λ per step on P ranks (λ for P > 1). α: the tension input's
+cost per bead-step on one rank; β: a ghost bead's cost per step, also from one rank
+(the periodic tiles against the cut-open piece, at least their Comm), so that the
+other jobs' load does not enter as ranks waiting for each other; both in CPU time (loop
+× LAMMPS's "CPU use"). g(P) = c·σ·w·(inner patch edges) for the px × py split of the
+sheet with the fewest ghosts (σ beads per area, w the ghost cutoff; c from the periodic
+run's ghosts over its whole rim, the 2-rank run's single cut beside it). λ =
+{LATENCY_S * 1e6:.0f} µs per step, **assumed** (about 10 ghost messages and one
+all-reduce a step at 1–3 µs each; not measurable here). Steps: fabmd's own plan at one
+fibre on the real target (`plan()`: time step, loading speed, travel) × dt(1)/dt(n),
+plus the relaxation budgets (crimp: a quarter of its budget, as its plan expects;
+coupons: the coupon's and the test's free relaxations, which stop once quasi-static —
+upper bounds). Beads at n fibres: × n·d(1)/d(n) per family (checked against models
+built at 7 and 19 fibres on the plain weave: beads +2.0 / +2.5 %, steps +2.2 / +3.2 %).
 
 ### Projection
 
 {table(PROJECTION_HEADER, rows)}
 
+Last column: what a run folder's `slurm.sh` asks for (`fabmd.protocols.common.slurm_ranks`:
+one rank per 5,000 beads, rounded down to 2^k or 3·2^k, at most 1,024). It was at most
+64 and any count: the 19-fibre picture frame then needed about 40 h (beyond the script's
+12 h), and a count with a large prime factor cuts a sheet into strips (the 7-fibre piece
+at 5,000 beads per rank without the rounding: 482 = 2 × 241 ranks, projected 64 %; 384:
+90 %). Its 5,000 beads per rank stays well inside the 70 % point.
+
+The tension input spends {m['pairs'][k]['1']['sections']['Modify']['pct']:.0f} % of its
+loop in Modify (the bare input: {m['pairs'][k]['plain']['sections']['Modify']['pct']:.0f}
+%): α is {model.alpha_s / fit_bare_alpha(m['pairs'][k]):.1f}× the bare input's cost per
+bead-step. Modify is every fix and compute of the step; the likely cause (not broken
+down per fix here) is the per-step atom-style variables: the affine drag's
+`fix addforce` and the damping and clamp power summed every step by
+`fix ave/time 1 ...`. A lever for the run time, not changed here.
+
 **A projection from 1–2 ranks on one node, not a measurement on a cluster.** Assumed: cost
-per bead and per ghost bead as measured here (a cluster core may be faster; the ratio
-β/α is what sets the ranks); no message latency growing with the rank count, no network
-between nodes, no load imbalance beyond what 2 ranks showed, the crimp and the picture
-frame costing per bead-step what tension does. So the rank counts are an upper bound,
-the core-hours a lower bound. Steps are the fixed-speed default loading
-(adaptive loading: fewer), and assume the 7- and 19-fibre fabrics can be built (the
-example's automatic clearance finds no loose 7-fibre state today).
+per bead and per ghost bead as measured here in CPU time (a cluster core may be faster;
+β/α and λ/α set the ranks); a fixed λ per step whatever the rank count (no growth of
+the all-reduce with P, no slow network between nodes); no load imbalance (fabric
+density varies along the sheet: weft columns, binders); the crimp and the picture frame
+costing per bead-step what tension does. The 2-rank runs could not check the model:
+under this load the 2 ranks waited for each other (their own fit gives 1–2 ranks
+everywhere). So the rank counts are an upper bound, the core-hours a lower bound.
+Steps are those of the fixed-speed default loading (adaptive loading: fewer); the 7-
+and 19-fibre fabrics are assumed buildable (the example's automatic clearance finds no
+loose 7-fibre state today).
 """
     return body, rows
 
