@@ -129,3 +129,21 @@ def test_a_relaxation_that_stops_in_its_first_chunk_ends_with_its_mean_speed(mon
     bar(1500, 1500)  # it stopped there: the budget shrinks to the steps run
     last = stream.getvalue().split("\r")[-1]
     assert "coupon: step 1500/1500  100.0 %  1 rank  750 steps/s" in last
+
+
+@pytest.mark.lammps
+def test_a_standalone_run_draws_its_line_and_gives_the_in_process_result(tmp_path, monkeypatch,
+                                                                         capsys):
+    from fabmd.engine import Engine
+    from fabmd.protocols.fibre_tension import FibreTension
+
+    def tiny():
+        return FibreTension(length_m=2e-3, max_strain=0.012, speed_fraction=1e-3)
+
+    a = tiny().run(tmp_path / "a", engine=Engine(progress=False))
+    monkeypatch.setenv("FABMD_TTY", "1")  # draw as on a terminal
+    b = tiny().run(tmp_path / "b", engine=Engine(backend="standalone"))
+    last = capsys.readouterr().err.split("\r")[-1]
+    assert "fibre_tension: step" in last and "100.0 %  1 rank" in last and "steps/s" in last
+    assert b.summary["measured_force_n"] == pytest.approx(a.summary["measured_force_n"],
+                                                          rel=1e-6)
