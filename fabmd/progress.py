@@ -22,8 +22,10 @@ class Progress:
         tension: step 24000/120000  20.0 %  2 ranks  1,850 steps/s  elapsed 0:00:13  left 0:00:52
 
     The speed is measured from the first call on (so a resumed run, which starts at its
-    checkpoint's step, shows its own speed; none is shown before the second call); the
-    time left is the steps left at that speed.
+    checkpoint's step, shows its own speed; none is shown before the second call, except
+    on the last line of a stage that ended before a speed was measured: the steps over
+    the time since the line was made); the time left is the steps left at that speed. The last
+    line is drawn once, however often the end is reported.
 
     Args:
         label: what is running (e.g. ``"tension"``).
@@ -48,6 +50,7 @@ class Progress:
         self._first: tuple[float, int] | None = None  # (time, step) of the first call
         self._last = 0.0
         self._drawn = False
+        self._ended: tuple[int, int] | None = None  # (step, total) of the last line drawn
 
     def rate(self, step: int, now: float) -> float:
         """Steps per second since the first call (0 before any step was timed)."""
@@ -56,12 +59,14 @@ class Progress:
         return (step - self._first[1]) / (now - self._first[0])
 
     def __call__(self, step: int, total: int) -> None:
-        if not self.enabled:
+        if not self.enabled or self._ended == (step, total):
             return
         now = time.perf_counter()
         rate = self.rate(step, now)
         if self._first is None:
             self._first = (now, step)
+        if rate == 0 and step >= total and now > self._t0:  # ended before a speed: the mean
+            rate = step / (now - self._t0)
         if step < total and now - self._last < self.min_interval_s:
             return
         self._last = now
@@ -76,4 +81,5 @@ class Progress:
         if step >= total:
             self.stream.write("\n")
             self._drawn = False
+            self._ended = (step, total)
         self.stream.flush()

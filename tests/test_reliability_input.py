@@ -351,7 +351,8 @@ def test_every_run_folder_has_a_slurm_script(tmp_path):
     assert f"#SBATCH --ntasks={slurm_ranks(model.n_beads)}" in script
     assert "#SBATCH --time=" in script and "-in in.tension -log log.lammps" in script
     assert subprocess.run(["bash", "-n", str(run_dir / "slurm.sh")]).returncode == 0
-    assert slurm_ranks(10) == 1 and slurm_ranks(50_000) == 10 and slurm_ranks(10**9) == 64
+    assert slurm_ranks(10) == 1 and slurm_ranks(50_000) == 8 and slurm_ranks(10**9) == 1024
+    assert slurm_ranks(235_000) == 32  # not 47: a prime count cuts a sheet into strips
 
 
 # ---- LAMMPS: a finished tiny run, replaced, resumed, strict ----------------------------

@@ -45,7 +45,8 @@ class Engine:
         ranks: MPI ranks for the standalone back end (None: chosen per stage from its
             bead count and the usable cores, :func:`fabmd.engine.ranks.choose_ranks`).
         threads: OpenMP threads per rank (``-sf omp``).
-        progress: show progress on a terminal (in-process back end).
+        progress: show progress on a terminal (both back ends: the standalone one reads
+            the steps from the log of the running ``lmp``).
         checkpoint_every: steps between checkpoints of in-process runs (0: none);
             ``run(..., resume=True)`` continues from the last one.
     """
@@ -94,13 +95,15 @@ class Engine:
 
             print(stage_header(run_dir, input_name, label, ranks), file=sys.stderr,
                   flush=True)
+        bar = Progress(label, ranks=ranks) if self.progress and mpi.is_root() else None
         if self.backend == "inprocess":
-            bar = Progress(label, ranks=ranks) if self.progress and mpi.is_root() else None
             run_inprocess(run_dir, input_name, threads=self.threads, progress=bar,
                           monitor=monitor, monitor_every=monitor_every,
                           checkpoint_every=self.checkpoint_every, resume=resume)
         else:
-            run_standalone(run_dir, input_name, ranks=ranks, threads=self.threads)
+            shown = bar if getattr(bar, "enabled", bar is not None) else None
+            run_standalone(run_dir, input_name, ranks=ranks, threads=self.threads,
+                           progress=shown)
         return EngineResult(self.backend, time.perf_counter() - t0, ranks, self.threads)
 
     def standalone_ranks(self, run_dir: Path, input_name: str, label: str) -> int:

@@ -68,14 +68,21 @@ def write_run_folder(out: Path | None, protocol: str, model: BeadModel, input_te
     return run_dir
 
 
-#: beads per MPI rank a Slurm script asks for (LAMMPS scales well down to a few thousand)
+#: beads per MPI rank a Slurm script asks for: the cluster projection (benchmarks/RESULTS.md,
+#: "Cluster projection") keeps >= 85 % parallel efficiency there on the 3D fabric
 BEADS_PER_RANK = 5000
+#: most ranks a Slurm script asks for (64 left the 19-fibre 3D picture frame ~40 h)
+MAX_SLURM_RANKS = 1024
+#: rank counts LAMMPS splits a sheet into even patches with (a prime count makes strips)
+EVEN_RANKS = tuple(sorted({m * 2**k for k in range(11) for m in (1, 3)}))
 SLURM_SCRIPT = "slurm.sh"
 
 
 def slurm_ranks(n_beads: int, beads_per_rank: int = BEADS_PER_RANK) -> int:
-    """MPI ranks for a model of ``n_beads`` beads: one per ``beads_per_rank``, 1 to 64."""
-    return max(1, min(64, n_beads // beads_per_rank))
+    """MPI ranks for a model of ``n_beads`` beads: one per ``beads_per_rank``, rounded
+    down to 2^k or 3·2^k (:data:`EVEN_RANKS`), 1 to :data:`MAX_SLURM_RANKS`."""
+    want = max(1, min(MAX_SLURM_RANKS, n_beads // beads_per_rank))
+    return max(r for r in EVEN_RANKS if r <= want)
 
 
 def write_slurm_script(run_dir: Path, input_name_: str, n_beads: int,
@@ -93,7 +100,8 @@ def write_slurm_script(run_dir: Path, input_name_: str, n_beads: int,
         "#!/bin/bash",
         "# Slurm batch job: this folder with plain LAMMPS (the command of run.sh).",
         "#   cd THIS_FOLDER && sbatch slurm.sh",
-        f"# Ranks: one per {BEADS_PER_RANK} beads ({n_beads} here). Edit the lines below",
+        f"# Ranks: one per {BEADS_PER_RANK} beads ({n_beads} here), rounded down to 2^k or"
+        f" 3*2^k, at most {MAX_SLURM_RANKS}. Edit the lines below",
         "# (partition, account, time) for your cluster. It needs a LAMMPS with the packages",
         f"# {' '.join(REQUIRED_PACKAGES)} (e.g. module load lammps).",
         f"#SBATCH --job-name=fabmd-{Path(input_name_).suffix.lstrip('.') or 'run'}",
