@@ -156,17 +156,6 @@ class CrimpTargets:
                              "datasheet [fabric] thickness)")
 
 
-def _merge(table: dict, changes: dict) -> dict:
-    """``table`` with ``changes`` put in (sub-tables merged key by key)."""
-    out = dict(table)
-    for key, value in changes.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
-        else:
-            out[key] = value
-    return out
-
-
 def targets_from_scene(scene, settings: dict | None = None) -> tuple[CrimpTargets, list[str]]:
     """The targets of ``scene`` (a :class:`fabmd.scenefile.Scene`: its ``[calibrate]``
     table with ``settings``, the ``--set`` values, put in) and notes on where they came
@@ -182,7 +171,7 @@ def targets_from_scene(scene, settings: dict | None = None) -> tuple[CrimpTarget
     table = scene.protocols.get("calibrate", {})
     if not isinstance(table, dict):
         raise InputError(f"{where}: [calibrate] must be a table, got {table!r}")
-    table = _merge(table, settings or {})
+    table = schema.merged(table, settings or {})
     notes = []
     fabric = scene.fabric
     if ("thickness_m" not in table and table.get("datasheet", True) is True
