@@ -131,8 +131,17 @@ def _in_bracket(seen: Seen) -> tuple[float | None, str] | None:
                       f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
                       f"{knob.text(knob.target)}: no strain in between reaches it within "
                       f"± {knob.text(knob.tolerance)} ({seen.tried})")
+    return on_grid(inside_bracket(s0, e0, s1, e1)), ""
+
+
+def inside_bracket(s0: float, e0: float, s1: float, e1: float) -> float:
+    """False position between strain ``s0`` (error ``e0``) and ``s1`` (error ``e1``, of
+    the other sign), kept inside the bracket's middle three fifths, so that the bracket
+    shrinks by a fifth at least with every run (also where the response is not linear
+    inside it: a snap, a slack range)."""
+    width = s1 - s0
     new = s0 - e0 * width / (e1 - e0)
-    return on_grid(min(max(new, s0 + 0.2 * width), s1 - 0.2 * width)), ""
+    return min(max(new, s0 + 0.2 * width), s1 - 0.2 * width)
 
 
 def _first_step(seen: Seen) -> tuple[float | None, str] | None:
