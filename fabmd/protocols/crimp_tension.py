@@ -20,7 +20,7 @@ three fifths, :func:`~fabmd.protocols.calibrate_search.inside_bracket`, the rule
 5 %). Where no crossing exists — the expansion limit reached on the same side of the
 target, or the tension jumping across it between two expansions closer than 2e-5 — the
 crimp raises :class:`~fabmd.errors.CalibrationNotReached` naming the family's expansion,
-the target, why, and every expansion and tension seen. After ``max_runs`` (8) crimp runs
+the target, why, and every expansion and tension seen. After ``max_runs`` (16) crimp runs
 it warns and keeps the closest. Every run overwrites the crimp folder; the last one stays
 (the closest, rerun where needed), and its ``summary.json`` → ``tension_search`` lists the
 expansions tried and the tensions they gave.
@@ -106,7 +106,7 @@ MIN_BRACKET = 2 * STRAIN_RESOLUTION
 
 
 def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
-                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 8):
+                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 16):
     """Run ``crimp`` (a :class:`~fabmd.protocols.crimp.Crimp` with ``target_tension``)
     until each family's mean yarn tension is within ``tolerance`` of its target (module
     docstring).
