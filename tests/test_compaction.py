@@ -123,4 +123,5 @@ def test_kinetic_to_work_without_work_is_not_measured(tmp_path):
     s = _reduce_quietly(_synthetic_run(tmp_path / "one", [5000.0], [5000.0], [1e-12]))
     assert s["max_kinetic_to_work"] is None  # no sample with work: not measured
     assert s["max_platen_pressure_mismatch"] == 0.0
-    assert s["quasi_static"]["ok"]
+    assert s["quasi_static"]["ok"] and s["quasi_static"]["not_measured"] == [
+        "max_kinetic_to_work"]

@@ -330,11 +330,14 @@ def quasi_static_measures(p: np.ndarray, pb: np.ndarray, ke: np.ndarray, work: n
 
 def judge_quasi_static(summary: dict, run_dir: Path) -> list[str]:
     """Judge the summary's measures against :data:`QUASI_STATIC_LIMITS` (verdict into the
-    summary; a warning when one fails); returns the problems."""
+    summary; a warning when one fails); returns the problems. ``ok``: no measure above its
+    limit; ``not_measured``: the measures that had no sample (they judge nothing)."""
     problems = [f"{k} = {summary[k]:.2g} > {v:g}" for k, v in QUASI_STATIC_LIMITS.items()
                 if summary[k] is not None and summary[k] > v]
     summary["quasi_static"] = {"ok": not problems, "limits": dict(QUASI_STATIC_LIMITS),
-                               "problems": problems}
+                               "problems": problems,
+                               "not_measured": [k for k in QUASI_STATIC_LIMITS
+                                                if summary[k] is None]}
     if problems:
         warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
                       f" lower speed_fraction", QuasiStaticWarning, stacklevel=3)
