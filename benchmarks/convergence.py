@@ -60,6 +60,7 @@ from fabmd.cli.validate import parse_settings  # noqa: E402
 from fabmd.errors import FabmdError, OverlapWarning, RunInterrupted  # noqa: E402
 from fabmd.examples_dir import example_scene  # noqa: E402
 from fabmd.scenefile import Scene, parse_scene  # noqa: E402
+from fabmd.schema import merged  # noqa: E402
 from fabmd.stages import section as stage_section  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -116,17 +117,6 @@ class Variant:
 def read_example(name: str | None = None) -> dict:
     """The example scene file as a dict (TOML); default: the study's (``--scene``)."""
     return tomllib.loads(example_scene(name or EXAMPLE).read_text())
-
-
-def merge(data: dict, settings: dict) -> dict:
-    """``settings`` (nested, from ``--set``) merged into a copy of ``data``."""
-    out = copy.deepcopy(data)
-    for key, value in settings.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = merge(out[key], value)
-        else:
-            out[key] = value
-    return out
 
 
 def base_levels(data: dict, frame_cells: int | None = None) -> dict:
@@ -723,7 +713,7 @@ def main(argv: list[str] | None = None) -> int:
     settings_text = " ".join(args.set)
     if EXAMPLE != "plain_weave.toml":
         settings_text = " ".join([Path(EXAMPLE).stem, *args.set])
-    data = merge(read_example(), parse_settings(args.set))
+    data = merged(read_example(), parse_settings(args.set))
     data_path = data_path_for(settings_text)
     store = {} if args.fresh or not data_path.exists() else json.loads(data_path.read_text())
     frame_cells = args.frame_cells

@@ -29,13 +29,8 @@ from pathlib import Path
 from .engine import Engine, mpi
 from .errors import CalibrationNotReached, InputError, RunInterrupted
 from .preflight import check_scene
-from .protocols.calibrate import (
-    CalibrationResult,
-    calibrate,
-    check_targets,
-    default_thickness_families,
-    targets_from_scene,
-)
+from .protocols.calibrate import CalibrationResult, calibrate, targets_from_scene
+from .protocols.calibrate_knobs import check_targets, default_thickness_families
 from .results.folder import abandon_run, begin_run, finish_run, write_json
 from .scenefile import Scene, load_scene
 from .stages import crimp_stage, periodic_cell, protocol_stage

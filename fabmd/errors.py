@@ -103,7 +103,9 @@ class NotQuasiStatic(FabmdError):
 
 class CalibrationNotReached(FabmdError):
     """``fabmd calibrate`` ran, but a target was not reached (the message says which, the
-    range tried, the best value and why; ``calibration.json`` records every run).
+    range tried, the best value and why; ``calibration.json`` records every run); or a
+    crimp's ``target_tension`` cannot be reached by its family's expansion (the crimp
+    folder's ``summary.json`` → ``tension_search`` records every run).
 
     Attributes:
         run_dir: the calibration folder.

@@ -34,6 +34,7 @@ module's ~150 lines over ``dataclasses`` and ``typing``.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import types
 import typing
@@ -147,6 +148,20 @@ def check_keys(table: dict, allowed, section: str) -> None:
     for key in table:
         if key not in allowed:
             raise InputError(f"[{section}] has no key {key!r} (allowed: {', '.join(allowed)})")
+
+
+def merged(base: dict, override: dict) -> dict:
+    """A new nested table: ``base`` with ``override`` put in, sub-tables merged key by key
+    (``{"contact": {"friction": 0.1}}`` changes one key of ``[contact]``); a value that is
+    not a table on both sides replaces. Neither input is changed, and the result shares
+    no mutable value with them (it is deep-copied)."""
+    out = copy.deepcopy(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merged(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
 
 
 def _value(cls, f: dataclasses.Field, hint, value, section: str, base):

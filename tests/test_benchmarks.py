@@ -142,8 +142,9 @@ def test_convergence_levels_build_the_refined_scenes():
 def test_convergence_set_reaches_the_contact_and_levels_parse():
     bench = load_convergence()
     from fabmd.cli.validate import parse_settings
+    from fabmd.schema import merged
 
-    data = bench.merge(bench.read_example(), parse_settings(["contact.friction=0.1"]))
+    data = merged(bench.read_example(), parse_settings(["contact.friction=0.1"]))
     base = bench.base_levels(data)
     scene = bench.build_scene(bench.variant("tension", ("sd", 0.5), base), data, base)
     assert scene.contact.friction == 0.1

@@ -1,5 +1,7 @@
 """Compaction between rigid platens: a tiny periodic plain-weave cell (seconds)."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ from fabmd.errors import InputError
 from fabmd.model.contact import ContactModel, ToolContact
 from fabmd.protocols.compaction import Compaction, thickness_at
 from fabmd.results.folder import read_csv
+from fabmd.scene.plan import RunPlan
 
 from .fabrics import plain_weave_cell
 
@@ -69,3 +72,56 @@ def test_scene_table_and_contact_reach_the_protocol():
                        contact=ContactModel(normal_stiffness_pa="1 GPa"))
     assert c.max_pressure_pa == 1.5e5 and c.datasheet_pressure_pa == 1e5
     assert c.contact.normal_stiffness_pa == 1e9 and c.tool.friction == 0.1
+
+
+def _synthetic_run(run_dir, top, bottom, kinetic, settle=10, every=10):
+    """A compaction run folder without LAMMPS: ``means.dat`` of the given loading samples
+    (pressures [Pa], kinetic energy [J]; the platen comes down 1 µm per interval), one
+    settling sample before them, ``plan.json`` and ``turn.txt`` (the pressure reached)."""
+    n = len(top)
+    rows = [(settle, 0.0, 0.0, 1e-3, 0.0, 1)] + [
+        (settle + every * (i + 1), top[i], bottom[i], 1e-3 - 1e-6 * i, kinetic[i], 1)
+        for i in range(n)]
+    run_dir.mkdir()
+    (run_dir / "means.dat").write_text(
+        "# Time-averaged data for fix means\n"
+        "# step pressure_pa bottom_pressure_pa thickness_m kinetic_j phase\n"
+        + "".join(" ".join(f"{v:.12g}" for v in r) + "\n" for r in rows))
+    RunPlan(time_step_s=1e-8, steps=every * (n + 5), every=every, duration_s=1e-6,
+            speed_m_s=0.1, extra={"settle_steps": settle}).write(run_dir)
+    (run_dir / "turn.txt").write_text(f"{every * n}\n")
+    return run_dir
+
+
+def _reduce_quietly(run_dir):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Compaction(unload=False).reduce(run_dir, plain_weave_cell()).summary
+
+
+def test_quasi_static_measures_start_at_first_contact(tmp_path):
+    # the top platen strikes one bead at the start (the bottom carries nothing, no work
+    # done yet), the bead rattles free, then the load goes through the fabric smoothly
+    top = [3000.0, 0.0, 0.0, 1000.0, 2000.0, 4000.0, 6000.0, 8000.0, 10000.0]
+    bottom = [0.0, 0.0, 0.0, 990.0, 1990.0, 3980.0, 5970.0, 7960.0, 9950.0]
+    kinetic = [1e-12] * 3 + [1e-15] * 6
+    s = _reduce_quietly(_synthetic_run(tmp_path / "c", top, bottom, kinetic))
+    assert s["contact_pressure_pa"] == 1000.0
+    # old code: the strike counted (mismatch 1.0, KE over a work floored at 1e-300)
+    assert s["max_platen_pressure_mismatch"] == pytest.approx(0.005, rel=1e-6)
+    assert s["max_kinetic_to_work"] < 1e-3
+    assert s["quasi_static"]["ok"], s["quasi_static"]["problems"]
+
+
+def test_kinetic_to_work_without_work_is_not_measured(tmp_path):
+    # both platens carry the load from the first sample, where the platen has done no work
+    top = [5000.0, 10000.0]
+    s = _reduce_quietly(_synthetic_run(tmp_path / "c", top, top, [1e-12, 1e-16]))
+    # old code: 1e-12 / 1e-300 = 1e288 at the first sample; now only the second is a ratio
+    work = 0.5 * (5000.0 + 10000.0) * 1e-6 * Compaction().area_m2(plain_weave_cell())
+    assert s["max_kinetic_to_work"] == pytest.approx(1e-16 / work)
+    s = _reduce_quietly(_synthetic_run(tmp_path / "one", [5000.0], [5000.0], [1e-12]))
+    assert s["max_kinetic_to_work"] is None  # no sample with work: not measured
+    assert s["max_platen_pressure_mismatch"] == 0.0
+    assert s["quasi_static"]["ok"] and s["quasi_static"]["not_measured"] == [
+        "max_kinetic_to_work"]

@@ -199,3 +199,24 @@ def test_every_field_named_with_a_unit_declares_it():
             if schema.unit_of(cls, f.name) is None and not plain:
                 missing.append(f"{cls.__name__}.{f.name}")
     assert not missing, f"declare their units in fabmd.schema.UNITS: {missing}"
+
+
+def test_merged_puts_an_override_into_a_copy_of_nested_tables():
+    from fabmd.schema import merged
+
+    base = {"contact": {"friction": 0.3, "law": {"form": "secant"}}, "yarns": ["warp"]}
+    override = {"contact": {"friction": 0.1, "law": {"k": 2}}, "yarns": ["weft"],
+                "crimp": {"target_tension": "1 cN/tex"}}
+    out = merged(base, override)
+    assert out == {"contact": {"friction": 0.1, "law": {"form": "secant", "k": 2}},
+                   "yarns": ["weft"], "crimp": {"target_tension": "1 cN/tex"}}
+    # neither input changed, and the result shares nothing mutable with them
+    assert base == {"contact": {"friction": 0.3, "law": {"form": "secant"}}, "yarns": ["warp"]}
+    assert override["contact"] == {"friction": 0.1, "law": {"k": 2}}
+    out["crimp"]["target_tension"] = 0
+    out["contact"]["law"]["form"] = "law"
+    out["yarns"].append("binder")
+    assert override["crimp"] == {"target_tension": "1 cN/tex"}
+    assert base["contact"]["law"] == {"form": "secant"} and override["yarns"] == ["weft"]
+    # a table replaces a plain value and the other way round
+    assert merged({"a": 1, "b": {"c": 2}}, {"a": {"x": 1}, "b": 3}) == {"a": {"x": 1}, "b": 3}

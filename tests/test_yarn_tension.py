@@ -2,6 +2,7 @@
 straight fibres held at a strain ε."""
 
 import dataclasses
+import json
 import math
 
 import pytest
@@ -80,3 +81,91 @@ def test_crimp_reaches_a_target_tension(tmp_path):
     assert search["reached"] and len(search["runs"]) <= 3
     assert result.summary["yarn_tension"]["warp"]["yarn_n"] == pytest.approx(target, rel=0.05)
     assert result.summary["expansion"]["warp"] == pytest.approx(-0.004, rel=0.05)
+
+
+# -- the search for a target tension on a response that is not monotone (no LAMMPS) --------
+TARGET_N = 2.0
+
+
+def snapping_cell(expansion: float) -> float:
+    """Yarn tension [N] of a cell like the within-family law's plain weave (RESULTS,
+    "Nonlinear within-family law"): it rises with the shrink to 0.55 of the target at
+    −4.5 %, snaps flat to 0 by −6 %, then the straightened fibres stretch and cross the
+    target at −6.82 %."""
+    shrink = -expansion
+    if shrink <= 0.045:
+        return 0.55 * TARGET_N * max(shrink, 0.0) / 0.045
+    if shrink <= 0.06:
+        return 0.55 * TARGET_N * (0.06 - shrink) / 0.015
+    return TARGET_N * (shrink - 0.06) / 0.0082
+
+
+def fake_crimp_runs(monkeypatch, response):
+    """Crimp runs replaced by ``response(expansion) -> yarn tension [N]``; returns the
+    expansions run."""
+    from types import SimpleNamespace
+
+    runs = []
+
+    def run(self, model, out=None, engine=None, overwrite=False, **_):
+        e = self.expansion["warp"]
+        runs.append(e)
+        out.mkdir(parents=True, exist_ok=True)
+        return SimpleNamespace(run_dir=out, summary={
+            "expansion": dict(self.expansion),
+            "yarn_tension": {"warp": {"yarn_n": response(e)}}})
+
+    monkeypatch.setattr(Crimp, "run", run)
+    return runs
+
+
+def test_target_tension_is_found_past_a_snap(tmp_path, monkeypatch):
+    from fabmd.protocols.crimp_tension import crimp_to_tension
+
+    runs = fake_crimp_runs(monkeypatch, snapping_cell)
+    crimp = Crimp(expansion={"warp": -0.01}, target_tension=f"{TARGET_N} N")
+    result = crimp_to_tension(crimp, parallel_fibres(diameter_m=DIAMETER), tmp_path / "c")
+    search = result.summary["tension_search"]
+    assert search["reached"], search
+    assert snapping_cell(runs[-1]) == pytest.approx(TARGET_N, rel=0.05)
+    assert -runs[-1] == pytest.approx(0.0682, abs=0.0005)  # the crossing past the snap
+    assert len(runs) <= 8
+    # the search went through the snap (a tension that fell with more shrink) on its way
+    assert any(-0.06 < e < -0.045 for e in runs) or any(e < -0.0682 for e in runs)
+
+
+def test_target_tension_without_a_crossing_is_refused_with_the_numbers(tmp_path,
+                                                                      monkeypatch):
+    from fabmd.errors import CalibrationNotReached
+    from fabmd.protocols.crimp_tension import crimp_to_tension
+
+    def flat_after_snap(e):  # the fibres never stretch again: no crossing at all
+        return snapping_cell(e) if -e <= 0.06 else 0.0
+
+    runs = fake_crimp_runs(monkeypatch, flat_after_snap)
+    crimp = Crimp(expansion={"warp": -0.01}, target_tension=f"{TARGET_N} N")
+    with pytest.raises(CalibrationNotReached) as caught:
+        crimp_to_tension(crimp, parallel_fibres(diameter_m=DIAMETER), tmp_path / "c",
+                         max_runs=12)
+    message = str(caught.value)
+    assert "crimp.target_tension.warp = 2 N cannot be reached with crimp.expansion.warp" \
+        in message
+    assert "stays below the target up to the shrink limit -0.4500" in message
+    assert "not monotone" in message and "-0.4500 -> 0 N" in message
+    assert min(runs) == -0.45
+    # the folder keeps the closest run and the search's record
+    summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    search = summary["tension_search"]
+    assert not search["reached"] and "cannot be reached" in search["reason"]
+    closest = min(search["runs"], key=lambda r: r["largest_relative_error"])
+    assert runs[-1] == closest["expansion"]["warp"]
+
+
+def test_a_jump_across_the_target_is_refused():
+    from fabmd.protocols.crimp_tension import next_expansion
+
+    new, why = next_expansion([(-0.05, 0.0), (-0.05001, 20.0)], TARGET_N, 0.05, 196.0)
+    assert new is None and "jumps from 20 N at -0.0500 to 0 N at -0.0500" in why
+    # a wider bracket is narrowed inside, never left
+    new, why = next_expansion([(-0.05, 0.0), (-0.06, 20.0)], TARGET_N, 0.05, 196.0)
+    assert -0.058 <= new <= -0.052 and why == ""

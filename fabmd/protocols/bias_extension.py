@@ -38,7 +38,8 @@ from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..scene.energy import ContactPower
-from .driven import ClampedTest, DrivenResult, energy_columns, read_outputs
+from .driven import ClampedTest, DrivenResult
+from .driven_outputs import energy_columns, read_outputs
 from .end_clamps import EndClampedTest
 from .tension import Tension
 

@@ -65,15 +65,9 @@ from ..engine import Engine, mpi
 from ..errors import InputError, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
-from ..results.measure import thickness_m
 from ..scene.outputs import TrajectoryOutput
-from .calibrate_search import (
-    STRAIN_LIMIT,
-    CoupledSearch,
-    Knob,
-    next_strain,
-    on_grid,
-)
+from .calibrate_knobs import check_targets, default_thickness_families
+from .calibrate_search import CoupledSearch, Knob, next_strain
 from .crimp import Crimp, CrimpResult
 
 
@@ -156,17 +150,6 @@ class CrimpTargets:
                              "datasheet [fabric] thickness)")
 
 
-def _merge(table: dict, changes: dict) -> dict:
-    """``table`` with ``changes`` put in (sub-tables merged key by key)."""
-    out = dict(table)
-    for key, value in changes.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
-        else:
-            out[key] = value
-    return out
-
-
 def targets_from_scene(scene, settings: dict | None = None) -> tuple[CrimpTargets, list[str]]:
     """The targets of ``scene`` (a :class:`fabmd.scenefile.Scene`: its ``[calibrate]``
     table with ``settings``, the ``--set`` values, put in) and notes on where they came
@@ -182,7 +165,7 @@ def targets_from_scene(scene, settings: dict | None = None) -> tuple[CrimpTarget
     table = scene.protocols.get("calibrate", {})
     if not isinstance(table, dict):
         raise InputError(f"{where}: [calibrate] must be a table, got {table!r}")
-    table = _merge(table, settings or {})
+    table = schema.merged(table, settings or {})
     notes = []
     fabric = scene.fabric
     if ("thickness_m" not in table and table.get("datasheet", True) is True
@@ -217,10 +200,6 @@ class CalibrationResult:
     controlled_reached: bool = False
     best_run: int = 0
     summary: dict = field(default_factory=dict)
-
-
-def default_thickness_families(model: BeadModel) -> tuple[str, ...]:
-    return ("binder",) if "binder" in model.family_names else tuple(model.family_names)
 
 
 def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None,
@@ -266,90 +245,136 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
     runs: list[dict] = []
     results: dict[int, CrimpResult] = {}
     for k in range(1, max_runs + 1):
-        expansion = dict(base.expansion)
-        for knob in knobs:
-            for fam in knob.families:
-                expansion[fam] = knob.value
-        t0 = time.perf_counter()
-        crimp = dataclasses.replace(base, expansion=expansion)
-        folder = root / f"run-{k:02d}"
-        try:
-            result = crimp.run(model, out=folder / "crimp", engine=engine, figures=False)
-            crimp_wall = time.perf_counter() - t0
-            pressed = None
-            if measure is not None:
-                pressed = measure.run(result.model, out=folder / "compaction", engine=engine)
-        except SimulationFailed as exc:  # recorded; the search stops there
-            runs.append({"run": k, "expansion": expansion,
-                         "knobs": {kn.name: kn.value for kn in knobs},
-                         "achieved": {kn.name: None for kn in knobs + uncontrolled},
-                         "wall_s": time.perf_counter() - t0, "failed": str(exc),
-                         "folder": str(folder)})
-            strains = ", ".join(f"{v:+.4f}" for v in runs[-1]["knobs"].values())
-            for knob in knobs:
-                if knob.verdict in ("", "reached"):
-                    knob.verdict = (f"{knob.name}: run {k} failed at strains {strains} "
-                                    f"({exc}); the search stopped there")
-            if on_run is not None:
-                on_run(runs[-1])
-            break
-        achieved = _achieved(result, pressed, knobs + uncontrolled, targets)
-        record = {"run": k, "expansion": expansion,
-                  "knobs": {kn.name: kn.value for kn in knobs},
-                  "achieved": achieved,
-                  "error": {kn.name: (None if achieved[kn.name] is None
-                                      else achieved[kn.name] - kn.target)
-                            for kn in knobs + uncontrolled},
-                  "wall_s": time.perf_counter() - t0, "crimp_wall_s": crimp_wall,
-                  "compaction_wall_s": (time.perf_counter() - t0 - crimp_wall
-                                        if pressed is not None else None),
-                  "quasi_static": result.summary.get("quasi_static"),
-                  "folder": str(folder)}
-        if pressed is not None:
-            record["pressure_reached"] = pressed.summary.get("pressure_reached")
-            start = pressed.summary.get("contact_pressure_pa")
-            if start is not None and start >= targets.at_pressure_pa:
-                record["pressure_note"] = (
-                    f"the curve starts at {start:.4g} Pa, above the target pressure: the "
-                    f"thickness there ({pressed.summary['contact_thickness_m']:.6g} m) is "
-                    f"taken (the thickness at the target lies between it and the starting "
-                    f"gap {pressed.summary['starting_gap_m']:.6g} m)")
-            record["compaction_quasi_static"] = pressed.summary["quasi_static"]["ok"]
-            record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
+        record, result = _trial(k, model, base, knobs, uncontrolled, measure, targets,
+                                root / f"run-{k:02d}", engine)
         runs.append(record)
+        if result is None:  # recorded; the search stops there
+            _stop_after_failure(knobs, record)
+            if on_run is not None:
+                on_run(record)
+            break
         results[k] = result
-        for knob in knobs:
-            q = achieved[knob.name]
-            if q is None:
-                knob.verdict = (f"{knob.name}: not measured in run {k} (the compaction did "
-                                f"not reach {targets.at_pressure_pa:g} Pa, or its curve "
-                                f"starts above it: see {folder / 'compaction'})")
-                continue
-            context = tuple(kn.value for kn in knobs if kn is not knob)
-            knob.samples.append((knob.value, q, context))
-            if knob.verdict in ("", "reached"):  # one met may be pushed out by another's move
-                knob.verdict = "reached" if knob.converged(q) else ""
+        _take_samples(knobs, record["achieved"], k, targets, Path(record["folder"]))
         if on_run is not None:
             on_run(record)
-        if len(knobs) == 1 or any(kn.verdict and kn.verdict != "reached" for kn in knobs):
-            # one knob (or the others stopped): the one-dimensional search, which knows
-            # brackets, turns and flat ranges
-            for knob in knobs:
-                if not knob.verdict:
-                    new, why = next_strain(knob)
-                    knob.verdict, knob.value = (why, knob.value) if new is None else ("", new)
-        elif not all(kn.verdict == "reached" for kn in knobs):
-            # coupled knobs (the weft shrink moves the thickness too): finite differences,
-            # one knob at a time, give the sensitivities; then Newton steps (Broyden)
-            new, why = coupled.step(knobs)
-            if new is None:
-                for knob in knobs:
-                    knob.verdict = knob.verdict if knob.verdict == "reached" else why
-            else:
-                for knob, value in zip(knobs, new, strict=True):
-                    knob.value = value
+        _move_knobs(knobs, coupled)
         if not any(not kn.verdict for kn in knobs):
             break
+    summary = _conclude(knobs, uncontrolled, runs, max_runs, fams, targets, measure,
+                        coupled, notes)
+    reached, controlled = summary["reached"], summary["controlled_reached"]
+    write_json(root / "calibration.json", summary)
+    summary = mpi.bcast_json(summary)
+    return CalibrationResult(summary["expansion"], summary["achieved"], reached,
+                             summary["reason"], summary["runs"],
+                             results.get(summary["best_run"]), root,
+                             controlled_reached=controlled, best_run=summary["best_run"],
+                             summary=summary)
+
+
+# -- the steps of one calibration (calibrate) -------------------------------------------
+def _trial(k: int, model: BeadModel, base: Crimp, knobs: list[Knob], uncontrolled: list[Knob],
+           measure, targets: CrimpTargets, folder: Path,
+           engine: Engine) -> tuple[dict, CrimpResult | None]:
+    """Run ``k``: the crimp at the knobs' strains (and the compaction that measures the
+    thickness under pressure); its record and result, or a record of the failure and
+    None."""
+    expansion = dict(base.expansion)
+    for knob in knobs:
+        for fam in knob.families:
+            expansion[fam] = knob.value
+    t0 = time.perf_counter()
+    crimp = dataclasses.replace(base, expansion=expansion)
+    try:
+        result = crimp.run(model, out=folder / "crimp", engine=engine, figures=False)
+        crimp_wall = time.perf_counter() - t0
+        pressed = None
+        if measure is not None:
+            pressed = measure.run(result.model, out=folder / "compaction", engine=engine)
+    except SimulationFailed as exc:
+        return {"run": k, "expansion": expansion,
+                "knobs": {kn.name: kn.value for kn in knobs},
+                "achieved": {kn.name: None for kn in knobs + uncontrolled},
+                "wall_s": time.perf_counter() - t0, "failed": str(exc),
+                "folder": str(folder)}, None
+    achieved = _achieved(result, pressed, knobs + uncontrolled, targets)
+    record = {"run": k, "expansion": expansion,
+              "knobs": {kn.name: kn.value for kn in knobs},
+              "achieved": achieved,
+              "error": {kn.name: (None if achieved[kn.name] is None
+                                  else achieved[kn.name] - kn.target)
+                        for kn in knobs + uncontrolled},
+              "wall_s": time.perf_counter() - t0, "crimp_wall_s": crimp_wall,
+              "compaction_wall_s": (time.perf_counter() - t0 - crimp_wall
+                                    if pressed is not None else None),
+              "quasi_static": result.summary.get("quasi_static"),
+              "folder": str(folder)}
+    if pressed is not None:
+        record["pressure_reached"] = pressed.summary.get("pressure_reached")
+        start = pressed.summary.get("contact_pressure_pa")
+        if start is not None and start >= targets.at_pressure_pa:
+            record["pressure_note"] = (
+                f"the curve starts at {start:.4g} Pa, above the target pressure: the "
+                f"thickness there ({pressed.summary['contact_thickness_m']:.6g} m) is "
+                f"taken (the thickness at the target lies between it and the starting "
+                f"gap {pressed.summary['starting_gap_m']:.6g} m)")
+        record["compaction_quasi_static"] = pressed.summary["quasi_static"]["ok"]
+        record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
+    return record, result
+
+
+def _stop_after_failure(knobs: list[Knob], record: dict) -> None:
+    """A failed run stops every knob still searching (or met), saying where."""
+    strains = ", ".join(f"{v:+.4f}" for v in record["knobs"].values())
+    for knob in knobs:
+        if knob.verdict in ("", "reached"):
+            knob.verdict = (f"{knob.name}: run {record['run']} failed at strains {strains} "
+                            f"({record['failed']}); the search stopped there")
+
+
+def _take_samples(knobs: list[Knob], achieved: dict, k: int, targets: CrimpTargets,
+                  folder: Path) -> None:
+    """Each knob's sample of run ``k`` (with the other knobs' strains as its context) and
+    whether it is met; a value not measured stops the knob, saying why."""
+    for knob in knobs:
+        q = achieved[knob.name]
+        if q is None:
+            knob.verdict = (f"{knob.name}: not measured in run {k} (the compaction did "
+                            f"not reach {targets.at_pressure_pa:g} Pa, or its curve "
+                            f"starts above it: see {folder / 'compaction'})")
+            continue
+        context = tuple(kn.value for kn in knobs if kn is not knob)
+        knob.samples.append((knob.value, q, context))
+        if knob.verdict in ("", "reached"):  # one met may be pushed out by another's move
+            knob.verdict = "reached" if knob.converged(q) else ""
+
+
+def _move_knobs(knobs: list[Knob], coupled: CoupledSearch) -> None:
+    """The knobs' next strains, or their verdicts where they cannot go on."""
+    if len(knobs) == 1 or any(kn.verdict and kn.verdict != "reached" for kn in knobs):
+        # one knob (or the others stopped): the one-dimensional search, which knows
+        # brackets, turns and flat ranges
+        for knob in knobs:
+            if not knob.verdict:
+                new, why = next_strain(knob)
+                knob.verdict, knob.value = (why, knob.value) if new is None else ("", new)
+    elif not all(kn.verdict == "reached" for kn in knobs):
+        # coupled knobs (the weft shrink moves the thickness too): finite differences,
+        # one knob at a time, give the sensitivities; then Newton steps (Broyden)
+        new, why = coupled.step(knobs)
+        if new is None:
+            for knob in knobs:
+                knob.verdict = knob.verdict if knob.verdict == "reached" else why
+        else:
+            for knob, value in zip(knobs, new, strict=True):
+                knob.value = value
+
+
+def _conclude(knobs: list[Knob], uncontrolled: list[Knob], runs: list[dict], max_runs: int,
+              fams: tuple[str, ...], targets: CrimpTargets, measure, coupled: CoupledSearch,
+              notes: list[str] | None) -> dict:
+    """The calibration's summary (``calibration.json``): the best run, whether every
+    target was reached, the verdicts of the knobs and of the targets only reported."""
     for knob in knobs:
         if not knob.verdict:
             knob.verdict = (f"{knob.name}: not reached within {max_runs} crimp runs "
@@ -374,10 +399,9 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
             f"{kn.kind}")
         if kn.verdict != "met":
             reasons.append(kn.verdict)
-    reached = controlled and not reasons
-    summary = {
+    return {
         "targets": _jsonable_targets(targets), "notes": list(notes or []),
-        "reached": reached, "controlled_reached": controlled,
+        "reached": controlled and not reasons, "controlled_reached": controlled,
         "reason": "; ".join(reasons),
         "expansion": best_run["expansion"], "achieved": best_run["achieved"],
         "best_run": best_run["run"], "last_run": runs[-1]["run"],
@@ -391,27 +415,6 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
         "sensitivity": coupled.describe(knobs),
         "wall_s": sum(r["wall_s"] for r in runs),
     }
-    write_json(root / "calibration.json", summary)
-    summary = mpi.bcast_json(summary)
-    return CalibrationResult(summary["expansion"], summary["achieved"], reached,
-                             summary["reason"], summary["runs"], results.get(best_run["run"]),
-                             root, controlled_reached=controlled,
-                             best_run=best_run["run"], summary=summary)
-
-
-def check_targets(model: BeadModel, targets: CrimpTargets, base: Crimp,
-                  fams: tuple[str, ...], compaction=None):
-    """Every check of :func:`calibrate` that needs no LAMMPS: (knobs searched, targets only
-    reported, the compaction that measures a thickness under pressure or None).
-
-    Raises:
-        InputError: the first impossible target (module docstring).
-    """
-    knobs, uncontrolled = make_knobs(model, targets, base, fams)
-    measure = _compaction(targets, compaction)
-    if measure is not None:
-        measure.input_text(model)  # a cell the platens can close on
-    return knobs, uncontrolled, measure
 
 
 def _closest(knob: Knob) -> tuple[float, float]:
@@ -434,79 +437,6 @@ def _jsonable_targets(targets: CrimpTargets) -> dict:
         if out[key] is not None:
             out[key] = list(out[key])
     return out
-
-
-def _compaction(targets: CrimpTargets, compaction):
-    """The compaction that measures the thickness at the target's pressure (or None)."""
-    if targets.at_pressure_pa is None:
-        return None
-    from .compaction import Compaction
-
-    p = targets.at_pressure_pa
-    return dataclasses.replace(compaction or Compaction(), max_pressure_pa=p,
-                               datasheet_pressure_pa=p, unload=False)
-
-
-def _bounds(model: BeadModel, targets: CrimpTargets, fams: tuple[str, ...],
-            kind: str) -> tuple[float, float]:
-    if targets.strain_range is not None:
-        return (float(targets.strain_range[0]), float(targets.strain_range[1]))
-    loose = (model.info or {}).get("crimp") or {}
-    crimps = [loose[f] for f in fams if isinstance(loose.get(f), int | float)]
-    if kind == "tension" or not crimps:
-        return (-STRAIN_LIMIT, STRAIN_LIMIT)
-    return (on_grid(-min(min(crimps), STRAIN_LIMIT)), STRAIN_LIMIT)
-
-
-def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
-               fams: tuple[str, ...]) -> tuple[list[Knob], list[Knob]]:
-    """The knobs the calibration searches and the targets it can only report (their
-    family's expansion serves the thickness); impossible targets raise InputError."""
-    from .crimp_tension import target_tensions_n, yarn_axial_stiffness_n
-
-    tensions = {} if targets.target_tension is None else target_tensions_n(
-        targets.target_tension, model, key="calibrate.target_tension")
-    unknown = (set(fams) | set(targets.crimp_pct)) - set(model.family_names)
-    if unknown:
-        raise InputError(f"calibrate names families {sorted(unknown)}; the fabric has "
-                         f"{list(model.family_names)}")
-    both = sorted(set(targets.crimp_pct) & set(tensions) - set(fams))
-    if both:
-        raise InputError(f"calibrate.crimp_pct and calibrate.target_tension both name "
-                         f"{both}: a family's expansion is one number and serves one "
-                         f"target (the other follows from it); give one of them")
-    knobs: list[Knob] = []
-    uncontrolled: list[Knob] = []
-    if targets.thickness_m is not None:
-        loose = thickness_m(model)
-        if targets.at_pressure_pa is None and targets.thickness_m >= loose:
-            raise InputError(f"calibrate.thickness_m = {targets.thickness_m:.4g} m is not "
-                             f"below the loose fabric's thickness {loose:.4g} m: crimping "
-                             f"only compacts; build a thicker loose fabric or lower the "
-                             f"target")
-        bounds = _bounds(model, targets, fams, "thickness")
-        start = min((base.expansion.get(f, 0.0) for f in fams), default=0.0)
-        start = start if start < 0 else -0.03
-        knobs.append(Knob("thickness", "thickness", fams, targets.thickness_m,
-                          targets.thickness_tolerance * targets.thickness_m, +1, bounds,
-                          on_grid(min(max(start, bounds[0]), bounds[1]))))
-    thickness_fams = set(fams) if targets.thickness_m is not None else set()
-    for fam, crimp_target in targets.crimp_pct.items():
-        bounds = _bounds(model, targets, (fam,), "crimp")
-        knob = Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
-                    targets.crimp_tolerance_pct, +1, bounds,
-                    on_grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
-                    first_step=0.01)
-        (uncontrolled if fam in thickness_fams else knobs).append(knob)
-    for fam, newtons in sorted(tensions.items()):
-        bounds = _bounds(model, targets, (fam,), "tension")
-        stiffness = yarn_axial_stiffness_n(model, fam)
-        knob = Knob(f"tension:{fam}", "tension", (fam,), newtons,
-                    targets.tension_tolerance * newtons, -1, bounds,
-                    on_grid(min(max(base.expansion.get(fam, 0.0), bounds[0]), bounds[1])),
-                    first_step=min(max(newtons / stiffness, 2e-3), 0.03))
-        (uncontrolled if fam in thickness_fams else knobs).append(knob)
-    return knobs, uncontrolled
 
 
 def _achieved(result: CrimpResult, pressed, knobs: list[Knob],

@@ -62,97 +62,172 @@ class Knob:
 
 def next_strain(knob: Knob) -> tuple[float | None, str]:
     """The next strain to try for ``knob`` from its samples, or (None, why) when no strain
-    in its range can reach the target (module docstring: bracket, secant, turn)."""
-    by_strain: dict[float, float] = {}
-    context = knob.samples[-1][2]
-    for s, q, c in knob.samples:
-        if c == context:  # taken with the other knobs where they are now
-            by_strain[s] = q  # a strain tried twice: its latest value
-    pts = sorted(by_strain.items())
-    err = [knob.error(q) for _, q in pts]
-    best = min(range(len(pts)), key=lambda i: abs(err[i]))
-    lo, hi = knob.bounds
-    tried = f"strains {pts[0][0]:+.4f} to {pts[-1][0]:+.4f} tried on {'+'.join(knob.families)}"
-    best_text = (f"closest {knob.text(pts[best][1])} at {pts[best][0]:+.4f} "
-                 f"(target {knob.text(knob.target)} ± {knob.text(knob.tolerance)})")
-    # 1. bracketed: two neighbouring samples on both sides of the target
+    in its range can reach the target (module docstring: bracket, secant, turn).
+
+    The steps, tried in order, each answering where it applies: inside a bracket
+    (:func:`_in_bracket`), a first step (:func:`_first_step`), across a flat range
+    (:func:`_across_flat`), outwards from an end of the range tried (:func:`_outwards`),
+    towards a turn (:func:`_towards_turn`)."""
+    seen = Seen.of(knob)
+    for step in (_in_bracket, _first_step, _across_flat, _outwards):
+        answer = step(seen)
+        if answer is not None:
+            return answer
+    return _towards_turn(seen)
+
+
+@dataclass
+class Seen:
+    """What a knob has seen where the other knobs are now: (strain, quantity) sorted by
+    strain (a strain tried twice: its latest value), their errors and the best one."""
+
+    knob: Knob
+    pts: list[tuple[float, float]]
+    err: list[float]
+    best: int
+
+    @classmethod
+    def of(cls, knob: Knob) -> Seen:
+        by_strain: dict[float, float] = {}
+        context = knob.samples[-1][2]
+        for s, q, c in knob.samples:
+            if c == context:  # taken with the other knobs where they are now
+                by_strain[s] = q  # a strain tried twice: its latest value
+        pts = sorted(by_strain.items())
+        err = [knob.error(q) for _, q in pts]
+        return cls(knob, pts, err, min(range(len(pts)), key=lambda i: abs(err[i])))
+
+    @property
+    def tried(self) -> str:
+        return (f"strains {self.pts[0][0]:+.4f} to {self.pts[-1][0]:+.4f} tried on "
+                f"{'+'.join(self.knob.families)}")
+
+    @property
+    def best_text(self) -> str:
+        knob, (s, q) = self.knob, self.pts[self.best]
+        return (f"closest {knob.text(q)} at {s:+.4f} "
+                f"(target {knob.text(knob.target)} ± {knob.text(knob.tolerance)})")
+
+    @property
+    def sigma(self) -> int:
+        """+1 where the best sample is above the target, −1 where below."""
+        return 1 if self.err[self.best] > 0 else -1
+
+
+def _in_bracket(seen: Seen) -> tuple[float | None, str] | None:
+    """Two neighbouring samples on both sides of the target (the pair nearest the best):
+    false position kept inside the bracket, or (None, why) where the bracket is narrower
+    than :data:`MIN_STRAIN_WIDTH` (the response jumps across the target)."""
+    knob, pts, err, best = seen.knob, seen.pts, seen.err, seen.best
     brackets = [i for i in range(len(pts) - 1) if err[i] * err[i + 1] < 0]
-    if brackets:
-        i = min(brackets, key=lambda j: min(abs(j - best), abs(j + 1 - best)))
-        (s0, q0), (s1, q1) = pts[i], pts[i + 1]
-        e0, e1 = err[i], err[i + 1]
-        width = s1 - s0
-        if width < MIN_STRAIN_WIDTH:
-            return None, (f"{knob.name}: the response jumps from {knob.text(q0)} at "
-                          f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
-                          f"{knob.text(knob.target)}: no strain in between reaches it within "
-                          f"± {knob.text(knob.tolerance)} ({tried})")
-        new = s0 - e0 * width / (e1 - e0)
-        return on_grid(min(max(new, s0 + 0.2 * width), s1 - 0.2 * width)), ""
-    # 2. one sample: a first step the way the quantity should move
-    sigma = 1 if err[best] > 0 else -1
-    s_best, q_best = pts[best]
-    if len(pts) == 1:
-        step = knob.first_step
-        slope = _old_slope(knob)  # from before the other knobs moved, where there is one
-        if slope:
-            step = min(max(abs(err[best] / slope), 10 * STRAIN_RESOLUTION), 0.1)
-            direction = -1 if err[best] * slope > 0 else 1
-        else:
-            direction = -sigma * knob.sign
-        new = on_grid(min(max(s_best + direction * step, lo), hi))
-        if new == s_best:
-            return None, (f"{knob.name}: {knob.text(q_best)} at the strain limit "
-                          f"{s_best:+.4f} on {'+'.join(knob.families)}, target "
-                          f"{knob.text(knob.target)}; widen calibrate.strain_range")
-        return new, ""
-    # 3. flat: every sample within the tolerance of the others (slack yarns carry no
-    # tension whatever their expansion): go the way the physics says, beyond the
-    # samples, with a step as wide as the range tried
-    prior = -sigma * knob.sign
+    if not brackets:
+        return None
+    i = min(brackets, key=lambda j: min(abs(j - best), abs(j + 1 - best)))
+    (s0, q0), (s1, q1) = pts[i], pts[i + 1]
+    e0, e1 = err[i], err[i + 1]
+    width = s1 - s0
+    if width < MIN_STRAIN_WIDTH:
+        return None, (f"{knob.name}: the response jumps from {knob.text(q0)} at "
+                      f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
+                      f"{knob.text(knob.target)}: no strain in between reaches it within "
+                      f"± {knob.text(knob.tolerance)} ({seen.tried})")
+    return on_grid(inside_bracket(s0, e0, s1, e1)), ""
+
+
+def inside_bracket(s0: float, e0: float, s1: float, e1: float) -> float:
+    """False position between strain ``s0`` (error ``e0``) and ``s1`` (error ``e1``, of
+    the other sign), kept inside the bracket's middle three fifths, so that the bracket
+    shrinks by a fifth at least with every run (also where the response is not linear
+    inside it: a snap, a slack range)."""
+    width = s1 - s0
+    new = s0 - e0 * width / (e1 - e0)
+    return min(max(new, s0 + 0.2 * width), s1 - 0.2 * width)
+
+
+def _first_step(seen: Seen) -> tuple[float | None, str] | None:
+    """One sample: a first step the way the quantity should move (with the slope from
+    before the other knobs moved, where there is one)."""
+    if len(seen.pts) != 1:
+        return None
+    knob, (s_best, q_best), e_best = seen.knob, seen.pts[0], seen.err[0]
+    lo, hi = knob.bounds
+    step = knob.first_step
+    slope = _old_slope(knob)  # from before the other knobs moved, where there is one
+    if slope:
+        step = min(max(abs(e_best / slope), 10 * STRAIN_RESOLUTION), 0.1)
+        direction = -1 if e_best * slope > 0 else 1
+    else:
+        direction = -seen.sigma * knob.sign
+    new = on_grid(min(max(s_best + direction * step, lo), hi))
+    if new == s_best:
+        return None, (f"{knob.name}: {knob.text(q_best)} at the strain limit "
+                      f"{s_best:+.4f} on {'+'.join(knob.families)}, target "
+                      f"{knob.text(knob.target)}; widen calibrate.strain_range")
+    return new, ""
+
+
+def _across_flat(seen: Seen) -> tuple[float | None, str] | None:
+    """Every sample within the tolerance of the others (slack yarns carry no tension
+    whatever their expansion): go the way the physics says, beyond the samples, with a
+    step as wide as the range tried."""
+    knob, pts = seen.knob, seen.pts
     values = [q for _, q in pts]
-    if max(values) - min(values) < knob.tolerance:
-        edge = pts[0][0] if prior < 0 else pts[-1][0]
-        step = min(max(knob.first_step, pts[-1][0] - pts[0][0]), 0.1)
-        new = on_grid(min(max(edge + prior * step, lo), hi))
-        if new == edge:
-            return None, (f"{knob.name}: the quantity hardly moves ({knob.text(pts[0][1])} "
-                          f"at {pts[0][0]:+.4f}, {knob.text(pts[-1][1])} at "
-                          f"{pts[-1][0]:+.4f}) up to the strain limit {edge:+.4f}; "
-                          f"{best_text}; widen calibrate.strain_range or change the target")
-        return new, ""
-    # 4. best at an end of the range tried: go on outwards (secant, limited step)
-    if best in (0, len(pts) - 1):
-        j = 1 if best == 0 else len(pts) - 2
-        outward = -1 if best == 0 else 1
-        s_j, q_j = pts[j]
-        gap = abs(s_best - s_j)
-        slope = (q_best - q_j) / (s_best - s_j)
-        step = abs(err[best] / slope) if slope else knob.first_step
-        step = min(max(step, 0.25 * gap, STRAIN_RESOLUTION * 10), max(2 * gap, knob.first_step),
-                   0.1)
-        new = on_grid(min(max(s_best + outward * step, lo), hi))
-        if new == s_best:
-            limit = "shrink" if outward < 0 else "expansion"
-            why = (" (a shrink beyond the loose crimp pulls the yarns straight: not a "
-                   "woven state)" if outward < 0 and knob.kind != "tension" else "")
-            return None, (f"{knob.name}: not reached at the {limit} limit {s_best:+.4f}{why}; "
-                          f"{best_text}; {tried}, the quantity still moving towards the "
-                          f"target ({knob.text(q_j)} at {s_j:+.4f}): widen "
-                          f"calibrate.strain_range or change the target")
-        return new, ""
-    # 5. best inside: the response turns between its neighbours; find the turning point
-    (s_l, q_l), (s_r, q_r) = pts[best - 1], pts[best + 1]
+    if not max(values) - min(values) < knob.tolerance:
+        return None
+    prior = -seen.sigma * knob.sign
+    edge = pts[0][0] if prior < 0 else pts[-1][0]
+    step = min(max(knob.first_step, pts[-1][0] - pts[0][0]), 0.1)
+    new = on_grid(min(max(edge + prior * step, knob.bounds[0]), knob.bounds[1]))
+    if new == edge:
+        return None, (f"{knob.name}: the quantity hardly moves ({knob.text(pts[0][1])} "
+                      f"at {pts[0][0]:+.4f}, {knob.text(pts[-1][1])} at "
+                      f"{pts[-1][0]:+.4f}) up to the strain limit {edge:+.4f}; "
+                      f"{seen.best_text}; widen calibrate.strain_range or change the target")
+    return new, ""
+
+
+def _outwards(seen: Seen) -> tuple[float | None, str] | None:
+    """The best sample at an end of the range tried: go on outwards (secant from its
+    neighbour, the step limited)."""
+    knob, pts, best = seen.knob, seen.pts, seen.best
+    if best not in (0, len(pts) - 1):
+        return None
+    j = 1 if best == 0 else len(pts) - 2
+    outward = -1 if best == 0 else 1
+    (s_best, q_best), (s_j, q_j) = pts[best], pts[j]
+    gap = abs(s_best - s_j)
+    slope = (q_best - q_j) / (s_best - s_j)
+    step = abs(seen.err[best] / slope) if slope else knob.first_step
+    step = min(max(step, 0.25 * gap, STRAIN_RESOLUTION * 10), max(2 * gap, knob.first_step),
+               0.1)
+    new = on_grid(min(max(s_best + outward * step, knob.bounds[0]), knob.bounds[1]))
+    if new == s_best:
+        limit = "shrink" if outward < 0 else "expansion"
+        why = (" (a shrink beyond the loose crimp pulls the yarns straight: not a "
+               "woven state)" if outward < 0 and knob.kind != "tension" else "")
+        return None, (f"{knob.name}: not reached at the {limit} limit {s_best:+.4f}{why}; "
+                      f"{seen.best_text}; {seen.tried}, the quantity still moving towards "
+                      f"the target ({knob.text(q_j)} at {s_j:+.4f}): widen "
+                      f"calibrate.strain_range or change the target")
+    return new, ""
+
+
+def _towards_turn(seen: Seen) -> tuple[float | None, str]:
+    """The best sample inside the range tried: the response turns between its
+    neighbours; a golden-section step towards the turning point, or (None, why) once the
+    turn is known to the tolerance and misses the target."""
+    knob, pts, best = seen.knob, seen.pts, seen.best
+    (s_l, q_l), (s_best, q_best), (s_r, q_r) = pts[best - 1], pts[best], pts[best + 1]
     resolved = max(abs(q_l - q_best), abs(q_r - q_best)) < knob.tolerance
     if s_r - s_l < 2 * MIN_STRAIN_WIDTH or resolved:  # the turn known to the tolerance
-        way = "lowest" if err[best] > 0 else "highest"  # the turn short of the target
+        way = "lowest" if seen.err[best] > 0 else "highest"  # the turn short of the target
         why = {("thickness", "lowest"): "more shrink makes the fabric thicker again",
                ("thickness", "highest"): "less shrink makes the fabric thinner again"}.get(
             (knob.kind, way), "the response turns there")
         return None, (f"{knob.name}: cannot reach {knob.text(knob.target)}: the {way} value "
                       f"the strain gives is {knob.text(q_best)} at {s_best:+.4f} "
                       f"({knob.text(q_l)} at {s_l:+.4f}, {knob.text(q_r)} at {s_r:+.4f}): "
-                      f"{why}; {tried}")
+                      f"{why}; {seen.tried}")
     left, right = s_best - s_l, s_r - s_best
     golden = 0.381966
     new = s_best + golden * right if right >= left else s_best - golden * left

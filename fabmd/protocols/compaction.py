@@ -20,7 +20,8 @@ a constant speed until the mean pressure over an output interval reaches
 Quasi-static: local (Cundall) damping, which opposes each bead's unbalanced force
 rather than its velocity, so the slow following motion carries no drag into the
 pressure; the summary reports the largest kinetic energy over the work done and the
-largest top/bottom pressure mismatch on the loading branch above 1 % of the peak.
+largest top/bottom pressure mismatch on the loading branch from first contact (both platens
+carry the load) and above 10 % of the peak (:func:`quasi_static_measures`).
 """
 
 from __future__ import annotations
@@ -263,9 +264,10 @@ class Compaction:
         pc, hc = pl[first:], hl[first:]
         order = np.argsort(pc, kind="stable")
         rises = np.diff(hc[order])
-        strong = loading & (p > 0.1 * peak)
-        ke_ratio = ke[strong] / np.maximum(work[strong], 1e-300)
-        mismatch = np.abs(pb[strong] - p[strong]) / p[strong]
+        # judged from first contact on: before it the bottom platen carries nothing yet
+        contact = np.zeros(p.size, dtype=bool)
+        contact[np.nonzero(loading)[0][first:]] = True
+        measures = quasi_static_measures(p, pb, ke, work, contact & (p > 0.1 * peak))
         targets = tuple(REPORT_PRESSURES_PA)
         if self.datasheet_pressure_pa is not None:
             targets += (self.datasheet_pressure_pa,)
@@ -292,10 +294,12 @@ class Compaction:
             "monotone_note": "loading branch from where both platens carry the load (within "
                              "a factor 2) to the turn: sorted by pressure, the thickness "
                              "never rises",
-            "max_kinetic_to_work": float(ke_ratio.max()) if ke_ratio.size else None,
-            "max_platen_pressure_mismatch": float(mismatch.max()) if mismatch.size else None,
-            "quasi_static_note": "kinetic energy over the platen work, and |bottom − top| / "
-                                 "top pressure, on the loading branch above 10 % of the peak",
+            **measures,
+            "quasi_static_note": "kinetic energy over the platen work done since the loading "
+                                 "began, and |bottom − top| / top pressure, on the loading "
+                                 "branch from first contact (both platens carry the load) "
+                                 "above 10 % of the peak; None: not measured (no such sample"
+                                 ", or the platen had done no work yet)",
             **overlap_summary(run_dir, self.contact),
         }
         problems = judge_quasi_static(summary, run_dir)
@@ -308,13 +312,32 @@ class Compaction:
                                                                  bool(problems))])
 
 
+def quasi_static_measures(p: np.ndarray, pb: np.ndarray, ke: np.ndarray, work: np.ndarray,
+                          window: np.ndarray) -> dict[str, float | None]:
+    """Largest kinetic energy over platen work [-] and largest |bottom − top| / top pressure
+    [-] over the samples in ``window`` (bool mask over the curve).
+
+    ``p``/``pb``: top/bottom platen pressure [Pa]; ``ke``: kinetic energy [J]; ``work``: the
+    platen's work on the fabric since the loading began [J]. A sample where the platen has
+    done no work yet has no ratio (a ratio there would be any size, not a measure); a
+    measure with no sample is None (not measured)."""
+    worked = window & (work > 0.0)
+    ke_ratio = ke[worked] / work[worked]
+    mismatch = np.abs(pb[window] - p[window]) / p[window]
+    return {"max_kinetic_to_work": float(ke_ratio.max()) if ke_ratio.size else None,
+            "max_platen_pressure_mismatch": float(mismatch.max()) if mismatch.size else None}
+
+
 def judge_quasi_static(summary: dict, run_dir: Path) -> list[str]:
     """Judge the summary's measures against :data:`QUASI_STATIC_LIMITS` (verdict into the
-    summary; a warning when one fails); returns the problems."""
+    summary; a warning when one fails); returns the problems. ``ok``: no measure above its
+    limit; ``not_measured``: the measures that had no sample (they judge nothing)."""
     problems = [f"{k} = {summary[k]:.2g} > {v:g}" for k, v in QUASI_STATIC_LIMITS.items()
                 if summary[k] is not None and summary[k] > v]
     summary["quasi_static"] = {"ok": not problems, "limits": dict(QUASI_STATIC_LIMITS),
-                               "problems": problems}
+                               "problems": problems,
+                               "not_measured": [k for k in QUASI_STATIC_LIMITS
+                                                if summary[k] is None]}
     if problems:
         warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
                       f" lower speed_fraction", QuasiStaticWarning, stacklevel=3)

@@ -3,18 +3,31 @@ crimped fabric carries the target tension.
 
 A target is given per family (or one for all) as N per yarn (a number or ``"5 N"``)
 or as ``"1 cN/tex"`` (the model must know the family's linear density). Each family's
-tension after crimp falls as its expansion α·ΔT rises; the search starts from the
-scene's expansion, takes a first step with the yarn's axial stiffness
-(ΔT_yarn ≈ −n_fibres·E·A·Δ(α·ΔT), the stiffest the response can be) and then secant
-steps (bisection once the target is bracketed and a secant step would leave the
-bracket), all families at once, until every family is within ``tolerance`` of its target
-(default 5 %) or ``max_runs`` (8) crimp runs are spent (then it warns and keeps the
-closest). Every run overwrites the crimp folder; the last one stays, and its
-``summary.json`` → ``tension_search`` lists the expansions tried and the tensions they
-gave. A family also given ``target_crimp_pct = "auto"`` never shrinks beyond that
-strain (its loose crimp less the margin, :mod:`fabmd.protocols.crimp_target`): a tension
-the fabric only carries with the yarns pulled straighter is not reached, and the search
-says so (``shrink_bound``, ``at_bound``) instead of pulling them into zig-zags.
+tension after crimp falls, in the large, as its expansion α·ΔT rises — but not always
+monotonically: with the within-family law the plain-weave cell snaps flat between −4.5
+and −6 % and its tension falls to ≈ 0 before the straightened fibres stretch
+(benchmarks/RESULTS.md, "Nonlinear within-family law"). The search
+(:func:`next_expansion`, each family on its own expansion, all families in every run)
+starts from the scene's expansion with a first step from the yarn's axial stiffness
+(ΔT_yarn ≈ −n_fibres·E·A·Δ(α·ΔT), the stiffest the response can be); while every
+tension tried lies on one side of the target it goes on outwards from the furthest
+expansion tried — secant steps where the tension so far moves the way it should (at most
+4× the last step), steps of twice the last one where the response has turned back (a
+snap): a local peak short of the target is not taken for the answer; once two neighbouring
+expansions bracket the target, false position inside the bracket (kept in its middle
+three fifths, :func:`~fabmd.protocols.calibrate_search.inside_bracket`, the rule of
+``fabmd calibrate``), until every family is within ``tolerance`` of its target (default
+5 %). Where no crossing exists — the expansion limit reached on the same side of the
+target, or the tension jumping across it between two expansions closer than 2e-5 — the
+crimp raises :class:`~fabmd.errors.CalibrationNotReached` naming the family's expansion,
+the target, why, and every expansion and tension seen. After ``max_runs`` (16) crimp runs
+it warns and keeps the closest. Every run overwrites the crimp folder; the last one stays
+(the closest, rerun where needed), and its ``summary.json`` → ``tension_search`` lists the
+expansions tried and the tensions they gave.
+A family also given ``target_crimp_pct = "auto"`` never shrinks beyond that strain (its
+loose crimp less the margin, :mod:`fabmd.protocols.crimp_target`): a tension the fabric only
+carries with the yarns pulled straighter is not reached, and the search says so
+(``shrink_bound``, ``at_bound``) instead of pulling them into zig-zags.
 """
 
 from __future__ import annotations
@@ -28,9 +41,10 @@ import numpy as np
 
 from .. import units
 from ..engine import mpi
-from ..errors import InputError
+from ..errors import CalibrationNotReached, InputError
 from ..model.bead_model import BeadModel
 from ..results.folder import write_json
+from .calibrate_search import STRAIN_RESOLUTION, inside_bracket
 
 _CN_PER_TEX = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*cN/tex\s*$")
 
@@ -89,10 +103,23 @@ def yarn_axial_stiffness_n(model: BeadModel, family: str) -> float:
     return float(yarn_ea[yarns].mean())
 
 
+#: the largest shrink or expansion the tension search tries [-]
+EXPANSION_LIMIT = 0.45
+#: a bracket narrower than this (in expansion) is not refined further: the tension jumps
+MIN_BRACKET = 2 * STRAIN_RESOLUTION
+
+
 def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
-                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 8):
+                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 16):
     """Run ``crimp`` (a :class:`~fabmd.protocols.crimp.Crimp` with ``target_tension``)
-    until each family's mean yarn tension is within ``tolerance`` of its target."""
+    until each family's mean yarn tension is within ``tolerance`` of its target (module
+    docstring).
+
+    Raises:
+        CalibrationNotReached: a family's expansion cannot give its target (no crossing
+            in the expansion range, or a jump across it); the crimp folder holds the
+            closest run and its ``tension_search``.
+    """
     targets = target_tensions_n(crimp.target_tension, model)
     fams = sorted(targets)
     stiffness = {f: yarn_axial_stiffness_n(model, f) for f in fams}
@@ -101,6 +128,7 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
                  for f in fams}
     tried: list[dict] = []
     best = None
+    refused: list[str] = []
     for run in range(max_runs):
         stage = _stage(crimp, fams, expansion)
         result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0)
@@ -112,30 +140,20 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
             best = (error, result)
         if error <= tolerance:
             break
-        step = {}
-        for f in fams:
-            if len(tried) >= 2 and tried[-1]["expansion"][f] != tried[-2]["expansion"][f]:
-                de = tried[-1]["expansion"][f] - tried[-2]["expansion"][f]
-                dt = tried[-1]["yarn_tension_n"][f] - tried[-2]["yarn_tension_n"][f]
-                slope = dt / de if dt / de < 0 else -stiffness[f]  # secant, if it falls
-            else:
-                slope = -stiffness[f]
-            step[f] = (targets[f] - got[f]) / slope
         new = {}
         for f in fams:
-            e = float(np.clip(expansion[f] + step[f], bound.get(f, -0.45), 0.45))
-            # once the target is bracketed (tension falls as the expansion rises), stay
-            # inside the bracket: bisect where the secant would leave it (the response
-            # turns steep where slack yarns go taut)
-            below = [r["expansion"][f] for r in tried if r["yarn_tension_n"][f] < targets[f]]
-            above = [r["expansion"][f] for r in tried if r["yarn_tension_n"][f] > targets[f]]
-            if below and above:
-                lo, hi = max(above), min(below)  # expansions: more tension at lo
-                if not lo < e < hi:
-                    e = 0.5 * (lo + hi)
-            new[f] = e
-        if new == expansion:  # every family held at its shrink bound: nothing left to try
-            break
+            if abs(got[f] / targets[f] - 1) <= tolerance:  # this one is there: stay
+                new[f] = expansion[f]
+                continue
+            seen = [(t["expansion"][f], t["yarn_tension_n"][f]) for t in tried]
+            new[f], why = next_expansion(seen, targets[f], tolerance, stiffness[f])
+            if new[f] is None:
+                refused.append(f"crimp.target_tension.{f} = {targets[f]:.4g} N cannot be "
+                               f"reached with crimp.expansion.{f}: {why}")
+            elif f in bound:  # "auto": never shrink past the loose crimp less the margin
+                new[f] = max(new[f], bound[f])
+        if refused or new == expansion:  # nothing left to try (every family held at its
+            break  # shrink bound, or no crossing)
         expansion = new
     error, result = best
     at_bound = sorted(f for f in bound if tried[-1]["expansion"][f] <= bound[f]
@@ -143,20 +161,27 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     search = {"targets_n": targets, "tolerance": tolerance, "runs": tried,
               "reached": error <= tolerance, "shrink_bound": bound or None,
               "at_bound": at_bound}
+    if refused:
+        search["reason"] = "; ".join(refused)
+    if error > tolerance and tried[-1]["largest_relative_error"] != error:
+        # rerun the closest, so that the folder holds it
+        closest = next(t for t in tried if t["largest_relative_error"] == error)
+        result = _stage(crimp, fams, closest["expansion"]).run(model, out, engine=engine,
+                                                              overwrite=True)
+    result.summary["tension_search"] = search
+    if mpi.is_root():
+        write_json(Path(result.run_dir) / "summary.json", result.summary)
+    if refused:
+        raise CalibrationNotReached(f"crimp: {search['reason']} (the crimp folder holds "
+                                    f"the closest run, {100 * error:.1f} % off)",
+                                    run_dir=result.run_dir)
     if error > tolerance:
-        if tried[-1]["largest_relative_error"] != error:  # rerun the closest for the folder
-            closest = next(t for t in tried if t["largest_relative_error"] == error)
-            result = _stage(crimp, fams, closest["expansion"]).run(model, out, engine=engine,
-                                                                  overwrite=True)
         why = (f"; {', '.join(at_bound)} at the \"auto\" shrink bound (more tension would "
                f"pull them straighter than the margin allows)" if at_bound else "")
         warnings.warn(f"crimp: the yarn tension did not reach its target within "
                       f"{100 * tolerance:g} % in {len(tried)} runs (closest: "
                       f"{100 * error:.1f} % off){why}; see summary.json tension_search",
                       stacklevel=3)
-    result.summary["tension_search"] = search
-    if mpi.is_root():
-        write_json(Path(result.run_dir) / "summary.json", result.summary)
     return result
 
 
@@ -179,3 +204,57 @@ def _stage(crimp, fams, expansion: dict[str, float]):
     return dataclasses.replace(
         crimp, target_tension=None, expansion={**crimp.expansion, **expansion},
         target_crimp_pct={f: v for f, v in crimp.target_crimp_pct.items() if f not in fams})
+
+
+def next_expansion(seen: list[tuple[float, float]], target_n: float, tolerance: float,
+                   stiffness_n: float) -> tuple[float | None, str]:
+    """The next expansion α·ΔT [-] for one family from the (expansion, yarn tension [N])
+    pairs ``seen`` so far (latest last), or (None, why) where no expansion within
+    ±:data:`EXPANSION_LIMIT` can give ``target_n`` [N] within ``tolerance`` (relative).
+
+    ``stiffness_n``: the yarn's axial stiffness n·E·A [N], for the first step. The rule
+    (module docstring): inside a bracket false position; else outwards from the furthest
+    expansion tried, secant where the tension so far moves the right way, doubling the
+    step where it turned back."""
+    by_expansion = dict(seen)  # an expansion tried twice: its latest tension
+    pts = sorted(by_expansion.items())
+    err = [t - target_n for _, t in pts]
+    numbers = ", ".join(f"{e:+.4f} -> {t:.4g} N" for e, t in pts)
+    brackets = [i for i in range(len(pts) - 1) if err[i] * err[i + 1] < 0]
+    if brackets:
+        latest = seen[-1][0]  # the bracket next to the latest run
+        i = min(brackets, key=lambda j: min(abs(pts[j][0] - latest),
+                                            abs(pts[j + 1][0] - latest)))
+        (e0, t0), (e1, t1) = pts[i], pts[i + 1]
+        if e1 - e0 < MIN_BRACKET:
+            return None, (f"the tension jumps from {t0:.4g} N at {e0:+.4f} to {t1:.4g} N "
+                          f"at {e1:+.4f}, across the target: no expansion in between gives "
+                          f"it within {100 * tolerance:g} % (expansion -> tension seen: "
+                          f"{numbers})")
+        return inside_bracket(e0, err[i], e1, err[i + 1]), ""
+    below = err[0] < 0  # every tension on one side: below needs more shrink
+    direction = -1 if below else 1
+    k = 0 if below else len(pts) - 1  # the furthest expansion tried that way
+    e_far, t_far = pts[k]
+    if len(pts) == 1:
+        step = abs(err[k]) / stiffness_n
+    else:
+        e_near, t_near = pts[1] if below else pts[-2]
+        gap = abs(e_far - e_near)
+        slope = (t_far - t_near) / (e_far - e_near)
+        closest = min(range(len(pts)), key=lambda j: abs(err[j]))
+        if slope < 0 and closest == k:  # so far the tension moves the way it should
+            step = min(abs(err[k] / slope), 4 * gap)
+        else:  # it turned back (a snap): go on outwards, not back to a local peak
+            step = 2 * gap
+    new = min(max(e_far + direction * step, -EXPANSION_LIMIT), EXPANSION_LIMIT)
+    if new != e_far:
+        return new, ""
+    way = "shrink" if below else "expansion"
+    side = "below" if below else "above"
+    peak = max(pts, key=lambda p: p[1]) if below else min(pts, key=lambda p: p[1])
+    turned = (f"; not monotone: {'the highest' if below else 'the lowest'} tension, "
+              f"{peak[1]:.4g} N, came at {peak[0]:+.4f}" if peak[0] != e_far else "")
+    return None, (f"the tension stays {side} the target up to the {way} limit "
+                  f"{e_far:+.4f} ({t_far:.4g} N there){turned} (expansion -> tension seen: "
+                  f"{numbers})")

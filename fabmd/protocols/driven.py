@@ -23,8 +23,9 @@ trajectory (after a failed run too: the frames up to the failure), reduces it, j
 (:mod:`fabmd.protocols.verdict`), and with ``check_rate`` reruns at half speed and
 reports how much the curve moved. :class:`RelaxedDrivenTest` adds the free relaxation
 before the loading (``relax``), :class:`ClampedTest` the drag choice of the coupon tests
-(``drag``). :func:`read_outputs`, :func:`energy_columns` and
-:meth:`DrivenTest.quasi_static_evidence` assemble the quasi-static evidence the same way
+(``drag``). :mod:`fabmd.protocols.driven_outputs` reads a run back (its
+:func:`~fabmd.protocols.driven_outputs.read_outputs`, ``energy_columns``) and
+:meth:`DrivenTest.quasi_static_evidence` assembles the quasi-static evidence the same way
 for every protocol.
 """
 
@@ -45,17 +46,24 @@ from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
 from ..model.timestep import stable_time_step_s
 from ..results.curves import curve_difference
-from ..results.folder import read_ave_time, read_print_file
 from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
-from ..scene.energy import ContactPower, balance, cumulative
+from ..scene.energy import ContactPower
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, open_run_folder, run_with_trajectory, scene_dict
+from .driven_outputs import (
+    STARTED_NOTE,
+    Outputs,
+    energy_balance,
+    kinetic_ratio,
+    kinetic_to_work_ratio,
+    started_mask,
+)
 from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
@@ -427,78 +435,6 @@ def relative_change(a, b) -> float | None:
     if a is None or b is None or not b:
         return None
     return abs(a - b) / abs(b)
-
-
-# -- reading a driven run back ----------------------------------------------------------
-@dataclass
-class Outputs:
-    """``curve.dat`` columns, with the interval means of ``means.dat`` put on its steps
-    (a mean is reported at its interval's end; 0 at step 0) and the cumulative works."""
-
-    columns: dict[str, np.ndarray]
-    means: dict[str, np.ndarray]
-    external_work_j: np.ndarray
-    damping_j: np.ndarray
-    contact_j: np.ndarray | None
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        return self.columns[name]
-
-
-def read_outputs(run_dir: Path, every: int, dt: float,
-                 monitor: ContactPower | None = None) -> Outputs:
-    """Read ``curve.dat`` and ``means.dat`` of a driven run."""
-    raw = read_print_file(Path(run_dir) / "curve.dat")
-    means = read_ave_time(Path(run_dir) / "means.dat")
-    for name in means:
-        if name != "step":
-            raw[name] = np.interp(raw["step"], means["step"], means[name], left=0.0)
-    external = np.interp(raw["step"], means["step"],
-                         cumulative(means["external_power_w"], every, dt), left=0.0)
-    damping = np.interp(raw["step"], means["step"],
-                        cumulative(means["damping_power_w"], every, dt), left=0.0)
-    contact = monitor.work_j(raw["step"], dt) if monitor is not None else None
-    return Outputs(raw, means, external, damping, contact)
-
-
-def energy_columns(out: Outputs) -> dict[str, np.ndarray]:
-    """The energy columns every driven curve carries."""
-    cols = {"kinetic_energy_j": out["kinetic_j"], "strain_energy_j": out["strain_energy_j"],
-            "external_work_j": out.external_work_j, "damping_dissipation_j": out.damping_j}
-    if out.contact_j is not None:
-        cols["contact_work_j"] = out.contact_j
-    return cols
-
-
-def energy_balance(out: Outputs) -> dict:
-    """External work = Δ strain + Δ kinetic + damping + contact work, closing error."""
-    return balance(out.external_work_j, out["strain_energy_j"], out["kinetic_j"],
-                   out.damping_j, out.contact_j)
-
-
-def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic / strain energy after start-up (None when nothing is started)."""
-    ratio = out["kinetic_j"][started] / np.maximum(out["strain_energy_j"][started], 1e-300)
-    return float(ratio.max()) if ratio.size else None
-
-
-def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic energy / external work done so far, after start-up."""
-    ratio = out["kinetic_j"][started] / np.maximum(np.abs(out.external_work_j[started]), 1e-300)
-    return float(ratio.max()) if ratio.size else None
-
-
-STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "
-                "tenth of the test, and once the strain energy gained exceeds 1 % of its final "
-                "gain (a slack fabric carries no load at first)")
-
-
-def started_mask(out: Outputs, loading: SmoothStartSpeed, progress: np.ndarray,
-                 fraction: float = 0.1) -> np.ndarray:
-    """After start-up (see :data:`STARTED_NOTE`); ``progress`` of the test in [0, 1]."""
-    u = out["strain_energy_j"]
-    loaded = (u - u[0]) > 0.01 * (u[-1] - u[0])
-    return (out["time_s"] > loading.ramp_time_s) & (np.asarray(progress) > fraction) & loaded
 
 
 def clamp_power(group: str = "clamps") -> tuple[str, str]:

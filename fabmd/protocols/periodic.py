@@ -39,7 +39,8 @@ from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
 from ..scene.templates import render, render_inline
-from .driven import DrivenResult, RelaxedDrivenTest, energy_columns, read_outputs
+from .driven import DrivenResult, RelaxedDrivenTest
+from .driven_outputs import energy_columns, read_outputs
 from .picture_frame import interval_force
 
 TRANSVERSE = ("held", "free")

@@ -54,7 +54,8 @@ from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
 from ..scene.templates import fmt, render
-from .driven import ClampedTest, DrivenResult, clamp_power, energy_columns, read_outputs
+from .driven import ClampedTest, DrivenResult, clamp_power
+from .driven_outputs import energy_columns, read_outputs
 
 PROTOCOL = "picture_frame"
 

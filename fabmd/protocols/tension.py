@@ -34,7 +34,8 @@ from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
 from ..scene.templates import fmt, render
-from .driven import DrivenResult, clamp_power, energy_columns, read_outputs
+from .driven import DrivenResult, clamp_power
+from .driven_outputs import energy_columns, read_outputs
 from .end_clamps import EndClampedTest
 
 PROTOCOL = "tension"

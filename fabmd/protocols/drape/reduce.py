@@ -17,7 +17,8 @@ from ...results.curves import values_at
 from ...results.folder import read_print_file
 from ...scene.energy import ContactPower
 from ..common import overlap_summary
-from ..driven import DrivenResult, Outputs, kinetic_to_work_ratio, read_outputs, started_mask
+from ..driven import DrivenResult
+from ..driven_outputs import Outputs, kinetic_to_work_ratio, read_outputs, started_mask
 from .geometry import DrapeGeometry, tool_geometry
 from .input import CLAMP_OVERLAP_FILE
 from .measures import draw_in, punch_reach, shear_grid, wrinkling

@@ -1,0 +1,89 @@
+"""Reading a driven test's run folder back: ``curve.dat`` with the interval means of
+``means.dat`` on its steps, the cumulative works, the energy columns every driven curve
+carries, the energy balance and the kinetic-energy ratios after start-up (SI: J, s).
+
+Split from :mod:`fabmd.protocols.driven` (which writes and runs the inputs these read).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..results.folder import read_ave_time, read_print_file
+from ..scene.energy import ContactPower, balance, cumulative
+from ..scene.loading import SmoothStartSpeed
+
+
+# -- reading a driven run back ----------------------------------------------------------
+@dataclass
+class Outputs:
+    """``curve.dat`` columns, with the interval means of ``means.dat`` put on its steps
+    (a mean is reported at its interval's end; 0 at step 0) and the cumulative works."""
+
+    columns: dict[str, np.ndarray]
+    means: dict[str, np.ndarray]
+    external_work_j: np.ndarray
+    damping_j: np.ndarray
+    contact_j: np.ndarray | None
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+
+def read_outputs(run_dir: Path, every: int, dt: float,
+                 monitor: ContactPower | None = None) -> Outputs:
+    """Read ``curve.dat`` and ``means.dat`` of a driven run."""
+    raw = read_print_file(Path(run_dir) / "curve.dat")
+    means = read_ave_time(Path(run_dir) / "means.dat")
+    for name in means:
+        if name != "step":
+            raw[name] = np.interp(raw["step"], means["step"], means[name], left=0.0)
+    external = np.interp(raw["step"], means["step"],
+                         cumulative(means["external_power_w"], every, dt), left=0.0)
+    damping = np.interp(raw["step"], means["step"],
+                        cumulative(means["damping_power_w"], every, dt), left=0.0)
+    contact = monitor.work_j(raw["step"], dt) if monitor is not None else None
+    return Outputs(raw, means, external, damping, contact)
+
+
+def energy_columns(out: Outputs) -> dict[str, np.ndarray]:
+    """The energy columns every driven curve carries."""
+    cols = {"kinetic_energy_j": out["kinetic_j"], "strain_energy_j": out["strain_energy_j"],
+            "external_work_j": out.external_work_j, "damping_dissipation_j": out.damping_j}
+    if out.contact_j is not None:
+        cols["contact_work_j"] = out.contact_j
+    return cols
+
+
+def energy_balance(out: Outputs) -> dict:
+    """External work = Δ strain + Δ kinetic + damping + contact work, closing error."""
+    return balance(out.external_work_j, out["strain_energy_j"], out["kinetic_j"],
+                   out.damping_j, out.contact_j)
+
+
+def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
+    """Largest kinetic / strain energy after start-up (None when nothing is started)."""
+    ratio = out["kinetic_j"][started] / np.maximum(out["strain_energy_j"][started], 1e-300)
+    return float(ratio.max()) if ratio.size else None
+
+
+def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
+    """Largest kinetic energy / external work done so far, after start-up."""
+    ratio = out["kinetic_j"][started] / np.maximum(np.abs(out.external_work_j[started]), 1e-300)
+    return float(ratio.max()) if ratio.size else None
+
+
+STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "
+                "tenth of the test, and once the strain energy gained exceeds 1 % of its final "
+                "gain (a slack fabric carries no load at first)")
+
+
+def started_mask(out: Outputs, loading: SmoothStartSpeed, progress: np.ndarray,
+                 fraction: float = 0.1) -> np.ndarray:
+    """After start-up (see :data:`STARTED_NOTE`); ``progress`` of the test in [0, 1]."""
+    u = out["strain_energy_j"]
+    loaded = (u - u[0]) > 0.01 * (u[-1] - u[0])
+    return (out["time_s"] > loading.ramp_time_s) & (np.asarray(progress) > fraction) & loaded
