@@ -551,8 +551,13 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
     runs = store.get("runs", {})
     done = [r for r in runs.values() if "values" in r]
     total = sum((r.get("wall_s") or 0) + (r.get("crimp_wall_s") or 0) for r in done)
-    contact = f"contact changed with `--set {settings_text}`" if settings_text else \
-        "the example's contact (default stiffness, μ = 0.3)"
+    changed = " ".join(f"--set {s}" for s in store.get("settings", []))
+    own = "the example's own settings (its contact included)"
+    if EXAMPLE != "plain_weave.toml":
+        contact = f"{own}, changed with `{changed}`" if changed else own
+    else:
+        contact = (f"contact changed with `{changed}`" if changed else
+                   "the example's contact (default stiffness, μ = 0.3)")
     example_frame = base_levels(read_example())["frame_cells"]
     frame_note = "" if base["frame_cells"] == example_frame else \
         f" (the example's is {example_frame} × {example_frame}: smaller to afford the levels)"
