@@ -11,16 +11,21 @@ from fabmd.scene.outputs import TrajectoryOutput
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def load_benchmark():
-    spec = importlib.util.spec_from_file_location("trajectory_cost",
-                                                  ROOT / "benchmarks" / "trajectory_cost.py")
+def load_benchmark(name: str):
+    """The script ``benchmarks/<name>.py`` as a module (registered under ``name``: its
+    dataclasses look their module up)."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))  # the scripts import their helpers
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
 
 
 def test_trajectory_block_is_taken_out_and_put_in():
-    bench = load_benchmark()
+    bench = load_benchmark("trajectory_cost")
     out = TrajectoryOutput(frames=4)
     text = "units si\n" + out.commands(100) + "\nrun 100\n" + out.final_commands() + "\nx\n"
     plain = bench.without_trajectory(text)
@@ -33,7 +38,7 @@ def test_trajectory_block_is_taken_out_and_put_in():
 
 @pytest.mark.lammps
 def test_benchmark_runs_on_a_tiny_sheet(tmp_path):
-    bench = load_benchmark()
+    bench = load_benchmark("trajectory_cost")
     report = tmp_path / "cost.json"
     assert bench.main(["--yarns", "2", "--fibres", "2x1", "--steps", "100", "--frames", "2",
                        "--json", str(report)]) == 0
@@ -43,13 +48,7 @@ def test_benchmark_runs_on_a_tiny_sheet(tmp_path):
 
 
 def load_accuracy():
-    import sys
-
-    spec = importlib.util.spec_from_file_location("accuracy", ROOT / "benchmarks" / "accuracy.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["accuracy"] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("accuracy")
 
 
 def test_accuracy_configuration_keeps_the_fabric_and_the_physical_speed():
@@ -92,14 +91,7 @@ def test_accuracy_errors_and_pareto_front():
 
 
 def load_convergence():
-    import sys
-
-    spec = importlib.util.spec_from_file_location("convergence",
-                                                  ROOT / "benchmarks" / "convergence.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["convergence"] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("convergence")
 
 
 def test_convergence_levels_build_the_refined_scenes():

@@ -2,8 +2,6 @@
 LAMMPS)."""
 
 import dataclasses
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
@@ -39,13 +37,9 @@ Total # of neighbors = 14079
 
 @pytest.fixture(scope="module")
 def bench():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    spec = importlib.util.spec_from_file_location("cluster_projection",
-                                                  ROOT / "benchmarks" / "cluster_projection.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["cluster_projection"] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    from .test_benchmarks import load_benchmark
+
+    return load_benchmark("cluster_projection")
 
 
 def test_the_timing_breakdown_of_the_last_run_is_read(bench):

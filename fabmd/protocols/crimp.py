@@ -387,18 +387,7 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
     plan = read_plan(run_dir) or crimp.plan(loose)  # what the run was written with
     ramp = plan.extra["ramp_steps"]
     if figures:
-        preview_png(crimped, run_dir / "sections.png",
-                    title="As-woven state after the crimp stage (cuts along warp and weft)")
-        cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
-        plot_curves(run_dir / "history.png", [
-            {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
-        ], "time step [–]", "thickness [mm]",
-            title="Crimp: thickness during ramp and relaxation",
-            notes=f"{end.sentence()}\nKE/U at the end {final_ke:.3g}"
-                  f" (limit {qs.kinetic_ratio:.3g})",
-            marks=[{"kind": "vline", "x": ramp, "label": f"ramp ends (step {ramp:,})"},
-                   {"kind": "vline", "x": steps, "style": "-",
-                    "label": f"LAMMPS stopped (step {steps:,}): {end.stopped_by}"}])
+        _figures(run_dir, crimped, raw, history, end, final_ke, qs.kinetic_ratio, ramp)
     summary = {
         "protocol": PROTOCOL,
         "expansion": expansion,
@@ -425,3 +414,21 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
         "yarn_tension": yarn_tension(crimped),
     }
     return crimped, summary
+
+
+def _figures(run_dir: Path, crimped: BeadModel, raw, history: dict, end, final_ke: float,
+             kinetic_limit: float, ramp: int) -> None:
+    """The crimp's pictures: sections, cuts and the thickness history."""
+    steps = end.final_step
+    preview_png(crimped, run_dir / "sections.png",
+                title="As-woven state after the crimp stage (cuts along warp and weft)")
+    cut_pngs(crimped, run_dir / "cuts", title="As-woven state after the crimp stage")
+    plot_curves(run_dir / "history.png", [
+        {"x": raw["step"], "y": 1e3 * history["thickness_m"], "label": "thickness"},
+    ], "time step [–]", "thickness [mm]",
+        title="Crimp: thickness during ramp and relaxation",
+        notes=f"{end.sentence()}\nKE/U at the end {final_ke:.3g}"
+              f" (limit {kinetic_limit:.3g})",
+        marks=[{"kind": "vline", "x": ramp, "label": f"ramp ends (step {ramp:,})"},
+               {"kind": "vline", "x": steps, "style": "-",
+                "label": f"LAMMPS stopped (step {steps:,}): {end.stopped_by}"}])
