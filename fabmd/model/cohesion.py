@@ -43,6 +43,7 @@ import numpy as np
 from .. import inputs
 from ..errors import InputError
 from .bead_model import BeadModel, BondType
+from .rest_state import length_bins
 
 REST_BIN = 1e-4  # relative width of a rest-length bin
 DEFAULT_REACH = 1.5  # link beads of other fibres closer than this many bead diameters
@@ -115,8 +116,7 @@ def add_cohesion(model: BeadModel, factor: float, reach: float = DEFAULT_REACH) 
         bt = max((t for t in model.fibre_bond_types() if t.family == fam),
                  key=lambda t: t.coefficient)
         spring[fam] = bt.coefficient
-    step = np.log1p(REST_BIN)
-    bins = np.round(np.log(rest) / step).astype(np.int64)
+    bins = length_bins(rest, REST_BIN)
     table = list(model.bond_type_table)
     types = np.zeros(len(links), np.int64)
     keys = np.unique(np.column_stack([np.searchsorted(sorted(spring), family), bins]), axis=0)

@@ -31,6 +31,13 @@ from .bead_model import BeadModel, BondType
 RELIEF_BIN = 5e-4
 
 
+def length_bins(lengths_m: np.ndarray, bin_width: float) -> np.ndarray:
+    """Bin index of each length on a logarithmic scale of relative width ``bin_width``:
+    lengths within about ``bin_width`` of each other share a bond type (also the
+    cohesion links' binning, :mod:`fabmd.model.cohesion`)."""
+    return np.round(np.log(lengths_m) / np.log1p(bin_width)).astype(np.int64)
+
+
 def relieve_fibre_tension(model: BeadModel, bin_width: float = RELIEF_BIN) -> BeadModel:
     """``model`` with its fibre bonds at rest in their present lengths (binned into bond
     types, ``bin_width`` relative; other bonds and the positions unchanged).
@@ -43,8 +50,7 @@ def relieve_fibre_tension(model: BeadModel, bin_width: float = RELIEF_BIN) -> Be
         return model
     lengths = model.bond_lengths()
     fibre = model.fibre_bond_mask()
-    step = np.log1p(bin_width)
-    bins = np.round(np.log(lengths) / step).astype(np.int64)
+    bins = length_bins(lengths, bin_width)
     table: list[BondType] = []
     new_types = np.zeros(model.n_bonds, np.int64)
     old_table = model.bond_type_table
