@@ -64,16 +64,26 @@ def energy_balance(out: Outputs) -> dict:
                    out.damping_j, out.contact_j)
 
 
+def _largest_ratio(numerator: np.ndarray, denominator: np.ndarray) -> float | None:
+    """Largest numerator / |denominator| over the samples where the denominator is not
+    zero; None when there is none (not measured — a floor would read as 1e+288)."""
+    den = np.abs(np.asarray(denominator, dtype=float))
+    measured = den > 0
+    if not measured.any():
+        return None
+    return float((np.asarray(numerator, dtype=float)[measured] / den[measured]).max())
+
+
 def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic / strain energy after start-up (None when nothing is started)."""
-    ratio = out["kinetic_j"][started] / np.maximum(out["strain_energy_j"][started], 1e-300)
-    return float(ratio.max()) if ratio.size else None
+    """Largest kinetic / strain energy after start-up (None when nothing is started or
+    no started sample has strain energy)."""
+    return _largest_ratio(out["kinetic_j"][started], out["strain_energy_j"][started])
 
 
 def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic energy / external work done so far, after start-up."""
-    ratio = out["kinetic_j"][started] / np.maximum(np.abs(out.external_work_j[started]), 1e-300)
-    return float(ratio.max()) if ratio.size else None
+    """Largest kinetic energy / external work done so far, after start-up (None when no
+    started sample has work done)."""
+    return _largest_ratio(out["kinetic_j"][started], out.external_work_j[started])
 
 
 STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "
