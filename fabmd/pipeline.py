@@ -120,8 +120,11 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
     if redo and not resume:
         raise InputError("--redo goes with --resume (run a finished run's test again); "
                          "to start a run over, use --overwrite")
-    check_test(scene, test, plan_test(scene, test))
+    plan = plan_test(scene, test)
+    check_test(scene, test, plan)
     check_scene(scene)
+    if crimped is None and not resume:
+        _check_crimp_targets(scene, plan.source)
     out = Path(out).resolve()
     partial = sibling(out, PARTIAL)
     if resume and (partial / MARKER).exists():
@@ -160,6 +163,15 @@ def run_test(scene: Scene, test: str, out: Path, engine: Engine | None = None,
                 from None
         raise
     return finish_run(out, work, summary)
+
+
+def _check_crimp_targets(scene: Scene, source: str) -> None:
+    """Refuse target crimps this fabric cannot reach before any folder is written (they
+    need the loose model, so only a scene that sets ``[crimp] target_crimp_pct`` builds
+    it here)."""
+    crimp = crimp_stage(scene)
+    if crimp.target_crimp_pct:
+        crimp.check_model(periodic_cell(scene) if source == "cell" else scene.model())
 
 
 def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None,
