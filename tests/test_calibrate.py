@@ -150,6 +150,17 @@ def test_search_reports_a_jump_across_the_target():
     assert "jumps from" in why and "no strain in between" in why
 
 
+def test_a_stiff_tension_is_refined_not_called_a_jump():
+    """A glass yarn's tension follows its fibres' strain (E·A ≈ 33 kN per Twintex yarn):
+    18.7 N (1 cN/tex) sits within 6e-4 of strain past the slack point, a bracket far
+    narrower than the thickness's 2e-3 — it must be refined to the target, not refused."""
+    knob = Knob("tension:weft", "tension", ("weft",), 18.7, 0.05 * 18.7, -1, (-0.4, 0.4),
+                0.0, first_step=0.01)
+    runs, why = drive(knob, lambda s: 33e3 * max(0.0, -0.012 - s), runs=16)
+    assert why == "", why
+    assert knob.samples[-1][1] == pytest.approx(18.7, rel=0.05)
+
+
 # ---- targets from the scene, checked before LAMMPS ------------------------------------
 def test_targets_come_from_the_table_and_the_datasheet(tmp_path):
     from fabmd import schema

@@ -14,8 +14,13 @@ from dataclasses import dataclass, field
 STRAIN_LIMIT = 0.4
 #: strains are tried on this grid (so that the scene file gets short, exact numbers)
 STRAIN_RESOLUTION = 1e-5
-#: a bracket or a turn narrower than this (in strain) is not refined further
+#: a bracket or a turn narrower than this (in strain) is not refined further: thickness
+#: and crimp move by a fraction of a per cent over it
 MIN_STRAIN_WIDTH = 2e-3
+#: the same for a yarn tension, which follows the fibres' own strain: E·A × 2e-3 is about
+#: 4× a 1 cN/tex weaving tension on glass, so a bracket that narrow is no jump — it is
+#: refined to a few grid steps (:data:`STRAIN_RESOLUTION`)
+MIN_TENSION_STRAIN_WIDTH = 4 * STRAIN_RESOLUTION
 
 
 @dataclass
@@ -38,6 +43,12 @@ class Knob:
     first_step: float = 0.03
     samples: list = field(default_factory=list)  # (strain, quantity, other knobs' strains)
     verdict: str = ""  # "" searching, "reached", or why it stopped
+
+    @property
+    def min_width(self) -> float:
+        """Narrowest bracket or turn refined further [strain] (:data:`MIN_STRAIN_WIDTH`,
+        :data:`MIN_TENSION_STRAIN_WIDTH` for a tension)."""
+        return MIN_TENSION_STRAIN_WIDTH if self.kind == "tension" else MIN_STRAIN_WIDTH
 
     def error(self, q: float) -> float:
         return q - self.target
@@ -117,7 +128,7 @@ class Seen:
 def _in_bracket(seen: Seen) -> tuple[float | None, str] | None:
     """Two neighbouring samples on both sides of the target (the pair nearest the best):
     false position kept inside the bracket, or (None, why) where the bracket is narrower
-    than :data:`MIN_STRAIN_WIDTH` (the response jumps across the target)."""
+    than the knob's :attr:`Knob.min_width` (the response jumps across the target)."""
     knob, pts, err, best = seen.knob, seen.pts, seen.err, seen.best
     brackets = [i for i in range(len(pts) - 1) if err[i] * err[i + 1] < 0]
     if not brackets:
@@ -126,7 +137,7 @@ def _in_bracket(seen: Seen) -> tuple[float | None, str] | None:
     (s0, q0), (s1, q1) = pts[i], pts[i + 1]
     e0, e1 = err[i], err[i + 1]
     width = s1 - s0
-    if width < MIN_STRAIN_WIDTH:
+    if width < knob.min_width:
         return None, (f"{knob.name}: the response jumps from {knob.text(q0)} at "
                       f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
                       f"{knob.text(knob.target)}: no strain in between reaches it within "
@@ -219,7 +230,7 @@ def _towards_turn(seen: Seen) -> tuple[float | None, str]:
     knob, pts, best = seen.knob, seen.pts, seen.best
     (s_l, q_l), (s_best, q_best), (s_r, q_r) = pts[best - 1], pts[best], pts[best + 1]
     resolved = max(abs(q_l - q_best), abs(q_r - q_best)) < knob.tolerance
-    if s_r - s_l < 2 * MIN_STRAIN_WIDTH or resolved:  # the turn known to the tolerance
+    if s_r - s_l < 2 * knob.min_width or resolved:  # the turn known to the tolerance
         way = "lowest" if seen.err[best] > 0 else "highest"  # the turn short of the target
         why = {("thickness", "lowest"): "more shrink makes the fabric thicker again",
                ("thickness", "highest"): "less shrink makes the fabric thinner again"}.get(
