@@ -212,6 +212,24 @@ def test_through_thickness_cell_with_40_weft_and_8_binders_renders_the_binder_pa
     assert len(planes) == 8  # every binder in its own plane
 
 
+def test_3d_example_at_7_fibres_builds_with_narrower_loose_weft():
+    """At 7 fibres per yarn the through-thickness example's binders pass between weft
+    columns too wide for them (no lift separates yarns side by side); the auto search
+    narrows warp and weft (binders keep their size) until the loose state exists. At its
+    own 3 fibres the example still builds as given (factor 1: unchanged)."""
+    text = (EXAMPLES / "through_thickness_3d.toml").read_text()
+    assert text.count("n_fibres = 3") == 3
+    scene = parse_scene(tomllib.loads(text.replace("n_fibres = 3", "n_fibres = 7")))
+    model = render_fabric(scene.fabric, scene.discretisation)
+    info = model.info
+    assert info["loose_width_factor"] < 1
+    assert info["clearance_m"] is None or info["clearance_m"] >= 0
+    pack = info["yarn_packing"]
+    assert pack["weft"]["woven_width_m"] == pytest.approx(2e-3)  # spread back in the crimp
+    assert pack["binder"]["width_m"] == pytest.approx(0.9e-3)
+    assert areal_density_kg_m2(model) == pytest.approx(2.2, rel=0.03)
+
+
 def test_binders_every_second_dent_and_old_layouts_unchanged():
     arch = Architecture3D.through_thickness(weft_layers=4, dents=4, binder_every=2)
     assert [len(d) for d in arch.binder_paths] == [1, 0, 1, 0]

@@ -183,9 +183,10 @@ class Fabric:
                 f"{100 * crimp:+.1f} %); check tex, ends/picks per cm and areal density")
 
     def with_loose_width(self, factor: float) -> Fabric:
-        """2D: the same fabric with warp and weft ``factor`` × as wide and as much taller
-        (same section area) in the loose state; ``woven_width_m`` keeps the given widths."""
-        if factor == 1.0 or self.is_3d:
+        """The same fabric with warp and weft ``factor`` × as wide and as much taller (same
+        section area) in the loose state; ``woven_width_m`` keeps the given widths. In 3D
+        fabrics the binders keep theirs: narrower weft columns leave them room to pass."""
+        if factor == 1.0:
             return self
 
         def narrower(spec: YarnSpec) -> YarnSpec:

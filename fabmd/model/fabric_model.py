@@ -108,8 +108,9 @@ def _check_folding(paths: list[YarnPath], fams: dict[str, FamilyBeads],
                 f"{path.family} height")
 
 
-#: loose-state search of ``Fabric.auto_clearance``: 2D loose widths tried (fractions of
-#: the width given; the section area is kept), and per width the lifts tried: 0, then a
+#: loose-state search of ``Fabric.auto_clearance``: warp and weft loose widths tried
+#: (fractions of the width given; the section area is kept; 3D binders keep theirs), and
+#: per width the lifts tried: 0, then a
 #: quarter of the smallest yarn height growing ×1.5, then bisection of the last step
 LOOSE_WIDTH_FACTORS = (1.0, 0.85, 0.7, 0.55)
 LIFT_TRIES = 7
@@ -125,8 +126,8 @@ def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, 
     """Beads, bonds and types of ``fabric`` (see :func:`render_loose`).
 
     With ``fabric.auto_clearance`` the loose state of a dense fabric is searched
-    for: at each loose width of :data:`LOOSE_WIDTH_FACTORS` (2D; the narrower
-    yarns are taller, same area, and spread again during the crimp) the crossing
+    for: at each loose width of :data:`LOOSE_WIDTH_FACTORS` (warp and weft; the
+    narrower yarns are taller, same area, and spread again during the crimp) the crossing
     yarns are lifted apart (``lift_m``, :data:`LIFT_TRIES` growing tries, then
     :data:`LIFT_BISECTIONS` halvings) until no yarns overlap and the smallest gap
     between yarns is :data:`AUTO_GAP_FRACTION` of the clearance. ``info`` records
@@ -153,7 +154,7 @@ def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, 
         return model
 
     tries = 0
-    factors = (1.0,) if fabric.is_3d else LOOSE_WIDTH_FACTORS
+    factors = LOOSE_WIDTH_FACTORS
     for factor in factors:
         base = fabric.with_loose_width(factor)
         step = 0.25 * min(s.height_m for s in base.specs().values())
