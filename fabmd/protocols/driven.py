@@ -49,6 +49,7 @@ from ..results.curves import curve_difference
 from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
+from ..scene.drag import damping_power as drag_power
 from ..scene.energy import ContactPower
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
@@ -314,12 +315,13 @@ class DrivenTest:
                       print_names: str = "", thermo_values: str = "",
                       damping_power: str | None = None) -> str:
         """Interval means, printed curve and thermo (``driven_outputs.lmp``);
-        ``damping_power``: the drag's power per free bead (default: that of a drag
-        γ·v on the absolute velocity)."""
+        ``damping_power``: LAMMPS text defining ``v_p_damp``, the drag's power on the free
+        beads (:func:`fabmd.scene.drag.damping_power`; default: that of a drag γ·v on the
+        absolute velocity)."""
         every = self.every(model)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
         if damping_power is None:
-            damping_power = f"{self.gamma(model):.10g}*(vx*vx+vy*vy+vz*vz)"
+            damping_power = drag_power("free", self.gamma(model))
         return render("driven_outputs", external_power=external_power, strain_energy=strain,
                       external_ref=external_ref, damping_power=damping_power, every=every,
                       mean_values=mean_values, mean_names=mean_names,
@@ -440,4 +442,14 @@ def relative_change(a, b) -> float | None:
 def clamp_power(group: str = "clamps") -> tuple[str, str]:
     """(LAMMPS text, reference) of the power put in through the beads of ``group``."""
     return render("clamp_power", group=group), "c_p_ext"
+
+
+def rigid_clamp_power(left: str = "clamp_left", right: str = "clamp_right",
+                      left_force: str = "f_left", right_force: str = "f_right"
+                      ) -> tuple[str, str]:
+    """(LAMMPS text, reference) of the power put in by two clamps that move as rigid
+    bodies along x only, from their x forces (computes ``left_force``, ``right_force``)
+    and velocities: −Σ f·v over the clamped beads without a formula per bead."""
+    return (render("clamp_power_rigid", left=left, right=right, left_force=left_force,
+                   right_force=right_force), "v_p_ext")
 

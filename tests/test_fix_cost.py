@@ -1,0 +1,133 @@
+"""The cheap forms of the drag and the power sums (issue 20) compute what the per-bead
+formulas computed: the damping and clamp powers from LAMMPS's own sums equal the old
+per-bead sums in the same run, and the split drag (fix viscous + addforce) moves the
+beads as the old three-formula addforce did."""
+
+import re
+
+import numpy as np
+import pytest
+
+from fabmd.engine.standalone import run_standalone
+from fabmd.protocols.common import write_run_folder
+from fabmd.protocols.picture_frame import PictureFrame
+from fabmd.protocols.tension import Tension
+from fabmd.scene.drag import AffineField, damping_power, drag_commands
+
+from .fabrics import plain_weave_cell
+
+STEPS = 600
+
+
+def _fixed(text: str, steps: int = STEPS) -> str:
+    """The loading run cut to ``steps``, a relaxation before it to ``run 0``."""
+    plain = re.compile(r"^run\s+\d+\s*$", re.M)
+    n = len(plain.findall(text))
+    seen = iter(range(n))
+    return plain.sub(lambda _m: f"run {steps if next(seen) == n - 1 else 0}", text)
+
+
+def _old_sums(text: str, field: AffineField, gamma: float, ext_ref: str) -> str:
+    """``text`` with the old per-bead sums written beside the new ones every 50 steps."""
+    vx, vy, g = field.vx, field.vy, f"{gamma:.10g}"
+    old = (f'variable        old_pa_damp atom "{g}*((vx-({vx}))*vx+(vy-({vy}))*vy+vz*vz)"\n'
+           "compute         old_p_damp free reduce sum v_old_pa_damp\n"
+           'variable        old_pa_clamp atom "-(fx*vx+fy*vy+fz*vz)"\n'
+           "compute         old_p_ext clamps reduce sum v_old_pa_clamp\n"
+           "fix             check all ave/time 50 1 50 v_p_damp c_old_p_damp "
+           f"{ext_ref} c_old_p_ext format \" %.15g\" file check.dat\n")
+    i = list(re.finditer(r"^run\s+\d+\s*$", text, re.M))[-1].start()
+    return text[:i] + old + text[i:]
+
+
+def _columns(path):
+    return np.loadtxt(path, comments="#", ndmin=2)
+
+
+def _gamma(text: str) -> float:
+    return float(re.search(r"fix\s+damping free viscous (\S+)", text).group(1))
+
+
+@pytest.fixture(scope="module")
+def coupon():
+    return plain_weave_cell(spacing_m=1e-3, cells=(3, 2), periodic=False)
+
+
+def test_power_text_needs_no_formula_per_bead_beyond_the_gradient():
+    field = AffineField(origin_m=(1e-3, 0.0), xx="2*v_v/(0.01+2*v_u)", tools="clamps")
+    text, power = drag_commands("affine", "free", 2e-4, field)
+    atom_vars = re.findall(r"variable\s+(\S+) atom \"([^\"]*)\"", text + power)
+    # one product x*vx for the sum and one multiply-add for the force
+    assert atom_vars == [("drag_fx", "v_drag_kxx*(x-(0.001))"), ("damp_xx", "x*vx")]
+    assert "fix             damping free viscous 0.0002" in text
+    assert "reduce sumsq vx vy vz" in power
+    absolute = damping_power("free", 2e-4)
+    assert " atom " not in absolute and "v_p_damp" not in absolute.split("equal")[0]
+    assert 'variable        p_damp equal "0.0002*(c_damp_vv[1]+c_damp_vv[2]+c_damp_vv[3])"' \
+        in absolute
+
+
+@pytest.mark.lammps
+@pytest.mark.parametrize("test", ["tension", "picture-frame"])
+def test_sums_equal_the_per_bead_formulas(tmp_path, coupon, test):
+    if test == "tension":
+        proto = Tension(max_elongation_pct=2.0)
+        model = coupon
+        left, right, _ = proto.clamps(model)
+        field = AffineField(origin_m=(0.5 * (left + right), 0.0),
+                            xx=f"2*v_v/({right - left:.10g}+2*v_u)", tools="clamps")
+        name, ext_ref = "in.tension", "v_p_ext"
+    else:
+        proto = PictureFrame(max_shear_angle_deg=20)
+        model = proto.prepare(plain_weave_cell(spacing_m=1e-3, cells=(3, 3), periodic=False))
+        g = proto.frame(model)
+        field = AffineField(origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xx="v_frame_lxx",
+                            xy="v_frame_lxy", yx="v_frame_lxy", yy="v_frame_lxx", tools="frame")
+        name, ext_ref = "in.picture_frame", "c_p_ext"
+    text = _fixed(proto.input_text(model))
+    text = _old_sums(text, field, _gamma(text), ext_ref)
+    folder = write_run_folder(tmp_path / "run", name.removeprefix("in."), model, text, {})
+    run_standalone(folder, name)
+    c = _columns(folder / "check.dat")
+    assert len(c) == STEPS // 50 + 1
+    # damping power: the same sum, γ(Σ|v|² − Σ v_aff·v) against Σ γ(v − v_aff)·v
+    scale = np.max(np.abs(c[:, 2]))
+    assert scale > 0
+    assert np.max(np.abs(c[:, 1] - c[:, 2])) < 1e-9 * scale
+    # clamp power: from the clamp forces and velocities (tension) or the same formula
+    scale = np.max(np.abs(c[:, 4]))
+    assert scale > 0
+    assert np.max(np.abs(c[:, 3] - c[:, 4])) < 1e-9 * scale
+
+
+OLD_DRAG = """variable        drag_fx atom "-{g}*(vx-({vx}))"
+variable        drag_fy atom "-{g}*(vy-({vy}))"
+variable        drag_fz atom "-{g}*vz"
+fix             damping free addforce v_drag_fx v_drag_fy v_drag_fz
+"""
+
+
+@pytest.mark.lammps
+def test_split_drag_moves_the_beads_as_the_old_formula(tmp_path):
+    """The picture frame (a gradient in x and y) with the old drag and the new: the
+    interval means of the frame power and the damping power agree to 1e-6 of their peak
+    over the run (the same force, summed in another order)."""
+    proto = PictureFrame(max_shear_angle_deg=20, damping_time_s=None)
+    model = proto.prepare(plain_weave_cell(spacing_m=1e-3, cells=(3, 3), periodic=False))
+    new = _fixed(proto.input_text(model))
+    g = proto.frame(model)
+    field = AffineField(origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xx="v_frame_lxx",
+                        xy="v_frame_lxy", yx="v_frame_lxy", yy="v_frame_lxx", tools="frame")
+    gamma = _gamma(new)
+    drag, _ = drag_commands("affine", "free", gamma, field)
+    assert drag in new
+    old = new.replace(drag, OLD_DRAG.format(g=f"{gamma:.10g}", vx=field.vx, vy=field.vy))
+    means = {}
+    for key, text in (("new", new), ("old", old)):
+        folder = write_run_folder(tmp_path / key, "picture_frame", model, text, {})
+        run_standalone(folder, "in.picture_frame")
+        means[key] = _columns(folder / "means.dat")
+    assert means["new"].shape == means["old"].shape
+    for col in (1, 2):  # external power, damping power
+        a, b = means["new"][:, col], means["old"][:, col]
+        assert np.max(np.abs(a - b)) <= 1e-6 * np.max(np.abs(b))
