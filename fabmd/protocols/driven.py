@@ -7,8 +7,9 @@ drag γ = m/τ on their motion relative to the tools' affine velocity field
 (:mod:`fabmd.scene.drag`; protocols without ``drag`` damp the absolute velocity) and
 writes, through ``lammps_templates/driven_outputs.lmp``:
 
-* ``means.dat`` — forces and powers averaged over each output interval (exact
-  integrals of the external and the damping power);
+* ``means.dat`` — forces and powers averaged over each output interval (integrals of
+  the external and the damping power, sampled every :data:`MEAN_SAMPLE_EVERY` steps
+  when the interval is long: :func:`mean_sample_every`);
 * ``curve.dat`` — clock, boundary displacement(s) and energies at the output steps;
 * the trajectory (``trajectory.h5``, ParaView files; :mod:`fabmd.scene.outputs`)
   with frames on output steps and the last step as the last frame.
@@ -68,6 +69,21 @@ from .driven_outputs import (
 from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
+
+#: the interval means (forces, powers) sample every this many steps once the output
+#: interval is at least :data:`MEAN_SAMPLING_FROM` steps: a Riemann sum on a 10-step grid
+#: instead of every step (issue 20: the per-bead sums were most of a step's cost; the
+#: error is measured in benchmarks/RESULTS.md "Per-step cost of fabmd's fixes")
+MEAN_SAMPLE_EVERY = 10
+MEAN_SAMPLING_FROM = 20 * MEAN_SAMPLE_EVERY
+
+
+def mean_sample_every(every: int) -> int:
+    """Steps between the samples of the interval means for output interval ``every``:
+    :data:`MEAN_SAMPLE_EVERY` where it divides a long enough interval, else every step."""
+    if every >= MEAN_SAMPLING_FROM and every % MEAN_SAMPLE_EVERY == 0:
+        return MEAN_SAMPLE_EVERY
+    return 1
 
 
 @dataclass
@@ -212,8 +228,12 @@ class DrivenTest:
         return cached_plan(self, model, self.derive_plan)
 
     def plan_every(self, duration_s: float, dt: float) -> int:
-        """Output interval [steps]: about ``samples`` curve points over ``duration_s``."""
-        return max(1, math.ceil(duration_s / dt) // self.samples)
+        """Output interval [steps]: about ``samples`` curve points over ``duration_s``; a
+        multiple of :data:`MEAN_SAMPLE_EVERY` when long enough to sample the means."""
+        raw = max(1, math.ceil(duration_s / dt) // self.samples)
+        if raw < MEAN_SAMPLING_FROM:
+            return raw
+        return MEAN_SAMPLE_EVERY * (raw // MEAN_SAMPLE_EVERY)
 
     def plan_damping_time_s(self, duration_s: float) -> float:
         """τ of the drag [s]: ``damping_time_s``, default a tenth of the test."""
@@ -324,6 +344,8 @@ class DrivenTest:
             damping_power = drag_power("free", self.gamma(model))
         return render("driven_outputs", external_power=external_power, strain_energy=strain,
                       external_ref=external_ref, damping_power=damping_power, every=every,
+                      sample_every=mean_sample_every(every),
+                      samples=every // mean_sample_every(every),
                       mean_values=mean_values, mean_names=mean_names,
                       print_values=print_values, print_names=print_names,
                       thermo_values=thermo_values,
