@@ -6,7 +6,7 @@ steps (no free relaxation: ``run 0``; the same cut as ``cluster_projection.py``)
 
 * ``3d-tension``: ``examples/through_thickness_3d.toml`` at one fibre per yarn, its
   periodic cell crimped as the scene says and tiled 5 × 2 (the piece of the cluster
-  projection), fabmd's tension input for it;
+  projection), fabmd's tension input for it (a quarter of ``--steps``: 6× the beads);
 * ``demo-tension``, ``demo-frame``: the demo's scene (``examples/plain_weave.toml``),
   its crimped cell cut to the demo's tension and picture-frame coupons (the coupons'
   own relaxation left out), fabmd's inputs for them.
@@ -123,7 +123,8 @@ def render_inputs(root: Path, steps: int, suffix: str) -> dict[str, Path]:
     for name, (scene_path, test, fibres) in INPUTS.items():
         scene = load_scene(ROOT / scene_path)
         scene = with_fibres(scene, fibres) if fibres else scene
-        text = fixed_steps(protocol_stage(scene, test).input_text(models[name]), steps)
+        text = fixed_steps(protocol_stage(scene, test).input_text(models[name]),
+                           steps // 4 if fibres else steps)  # the 3D piece: 6x the beads
         protocol = test.replace("-", "_")
         folders[name] = write_run_folder(root / f"{name}{suffix}", protocol, models[name],
                                          text, {}, overwrite=True)
@@ -214,7 +215,8 @@ def sampling_error(folder: Path) -> dict:
     return out
 
 
-def measure(root: Path, steps: int, repeat: int, before: Path | None) -> dict:
+def measure(root: Path, steps: int, repeat: int, before: Path | None,
+            sampling_steps: int) -> dict:
     print("models (crimp, coupons) ...", flush=True)
     build_models(root)
     after = render_inputs(root, steps, "")
@@ -241,12 +243,21 @@ def measure(root: Path, steps: int, repeat: int, before: Path | None) -> dict:
                 print(f"  {r} {name:13s} {key:8s} cpu {rec['cpu_s']:6.2f} s wall "
                       f"{rec['wall_s']:6.1f} s Modify {rec['modify_pct']:4.1f} % load "
                       f"{rec['load']:.2f}", flush=True)
-    for name, folder in after.items():
+    data["sampling"] = sampling(root, sampling_steps)
+    data["sampling_steps"] = sampling_steps
+    return data
+
+
+def sampling(root: Path, steps: int) -> dict:
+    """The sampled means against every-step ones on the "after" inputs cut to ``steps``
+    (more output intervals than the timing runs)."""
+    out = {}
+    for name, folder in render_inputs(root, steps, "-long").items():
         exact = variant(folder, "exact", with_exact_means((folder / input_file(folder))
                                                           .read_text()))
         timed_run(exact)
-        data["sampling"][name] = sampling_error(exact)
-    return data
+        out[name] = sampling_error(exact)
+    return out
 
 
 # ---- report ------------------------------------------------------------------------------
@@ -300,20 +311,55 @@ def sampling_rows(data: dict) -> list[list]:
             for name, cols in data["sampling"].items() for col, v in cols.items()]
 
 
+INTRO = """\
+What changed (issue 20; LAMMPS evaluates an atom-style formula node by node for every bead
+on every step, about 50-70 instructions a node under callgrind, which made fabmd's per-bead
+formulas most of a step):
+
+* drag -γ·(v − v_affine): `fix viscous` (no formula) plus an `addforce` of γ·L·(r − r0)
+  whose coefficients are equal-style (one multiply-add per non-zero gradient entry per
+  bead), instead of three per-bead formulas (`lammps_templates/affine_drag.lmp`);
+* damping power γ·(Σ|v|² − Σ v_affine·v) from `reduce sumsq vx vy vz` and the sums of
+  vx, vy and one product r_j·v_i per gradient entry, instead of a 25-node formula per bead
+  (`damping_power.lmp`); identical to round-off (tests/test_fix_cost.py: 3e-15);
+* tension clamp power −(F_left·v_left + F_right·v_right) from the clamp forces and
+  `vcm()` (the clamps move as rigid bodies along x), instead of −f·v per clamped bead
+  (`clamp_power_rigid.lmp`); identical to round-off;
+* interval means (clamp forces, powers) sampled every 10 steps where the output interval
+  is >= 200 steps (the plan rounds the interval to a multiple of 10): a Riemann sum on a
+  10-step grid instead of every step (`driven_outputs.lmp`); its error is the last table.
+
+"""
+
+
 def report(data: dict) -> str:
-    return (f"CPU seconds of `lmp -in` on one rank, median of {data['repeat']} back-to-back "
-            f"repeats, loading cut to {data['steps']:,} steps (no relaxation).\n\n"
+    speedups = [f"{name} {med(v['before'], 'cpu_s') / med(v['after'], 'cpu_s'):.2f}×"
+                for name, v in data["runs"].items() if "before" in v]
+    return (INTRO + ("Before/after (CPU time): " + ", ".join(speedups) + ".\n\n"
+                     if speedups else "")
+            + "The machine (2 cores) was loaded by the other developers' jobs (the 1-minute "
+              "load before each run is in the last column): CPU time of the `lmp` process, "
+              "not wall time; read ratios, not absolute costs (an idle core is faster).\n\n"
+            + f"CPU seconds of `lmp -in` on one rank, median of {data['repeat']} back-to-back "
+            f"repeats, loading cut to {data['steps']:,} steps (the 3D piece: a quarter; no "
+            "relaxation).\n\n"
             "### Seconds per fix group (after: the full input minus the input without it)\n\n"
             + table(FIX_HEADER, fix_rows(data))
             + "\n\n### Every run\n\n" + table(HEADER, rows(data))
             + "\n\n### Interval means sampled every 10 steps against every step "
-              "(same trajectory)\n\n" + table(SAMPLING_HEADER, sampling_rows(data)) + "\n")
+              f"(same trajectory; loading cut to {data.get('sampling_steps', 0):,} steps, "
+              "the 3D piece a quarter)\n\n" + table(SAMPLING_HEADER, sampling_rows(data))
+            + "\n")
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=2000)
     p.add_argument("--repeat", type=int, default=2)
+    p.add_argument("--sampling-steps", type=int, default=6000,
+                   help="steps of the runs that check the sampled means")
+    p.add_argument("--sampling-only", action="store_true",
+                   help="rerun only the sampled-means check (timings from the saved JSON)")
     p.add_argument("--before", type=Path, default=None,
                    help="source tree of the fabmd to compare with (its inputs are rendered "
                         "with it first on the path)")
@@ -325,11 +371,17 @@ def main(argv: list[str] | None = None) -> int:
     if args.render is not None:  # under the older fabmd: its inputs for the same models
         render_inputs(args.render, args.steps, "-before")
         return 0
-    if args.report_only:
+    if args.report_only or args.sampling_only:
         data = json.loads(args.json.read_text())
+        if args.sampling_only:
+            root = Path(tempfile.mkdtemp(prefix="fabmd-fix-cost-"))
+            build_models(root)
+            data["sampling"] = sampling(root, args.sampling_steps)
+            data["sampling_steps"] = args.sampling_steps
+            args.json.write_text(json.dumps(data, indent=1) + "\n")
     else:
         root = Path(tempfile.mkdtemp(prefix="fabmd-fix-cost-"))
-        data = measure(root, args.steps, args.repeat, args.before)
+        data = measure(root, args.steps, args.repeat, args.before, args.sampling_steps)
         data["machine_load_after"] = os.getloadavg()[0]
         args.json.write_text(json.dumps(data, indent=1) + "\n")
     body = report(data)

@@ -179,3 +179,29 @@ def test_sampled_means_match_every_step_and_the_balance_closes(tmp_path):
     # (an interval mean lags its end by half an interval: 3 % at 1 % with 20 intervals)
     assert result.summary["force_at_elongation_n"]["1"] == pytest.approx(n * ea / 100, rel=0.05)
     assert result.summary["energy_balance"]["relative_error"] < 0.05
+
+
+# -- benchmarks/fix_cost.py: its input surgery and its table (no LAMMPS) -------------------
+def test_fix_cost_script_removes_fixes_and_reports(tmp_path):
+    from .test_benchmarks import load_benchmark
+
+    fc = load_benchmark("fix_cost")
+    text = Tension(samples=20).input_text(parallel_fibres(n=2))
+    bare = fc.without(text, [i for ids in fc.GROUPS.values() for i in ids])
+    for fix in ("damping", "damping_affine", "means", "guard_speed", "pull_left"):
+        assert f"fix             {fix} " in text and f"fix             {fix} " not in bare
+    assert "fix             curve " in bare  # only the named fixes go
+    exact = fc.with_exact_means(text)
+    assert "fix             exact_means all ave/time 1 " in exact
+    assert fc.fixed_steps(text, 50).count("\nrun 50\n") == 1
+    rec = {"cpu_s": 2.0, "wall_s": 4.0, "load": 3.0, "loop_s": 3.5, "modify_pct": 60.0,
+           "atoms": 1000, "steps": 100}
+    runs = {"after": [rec, rec], "before": [dict(rec, cpu_s=3.0)] * 2,
+            **{f"-{g}": [dict(rec, cpu_s=1.5)] * 2 for g in fc.GROUPS},
+            "bare": [dict(rec, cpu_s=1.0)] * 2}
+    data = {"steps": 100, "repeat": 2, "runs": {"x": runs}, "sampling_steps": 600,
+            "sampling": {"x": {"force_left_n": {"interval": 1e-3, "sum": 1e-4,
+                                                "intervals": 3}}}}
+    body = fc.report(data)
+    assert "x 1.50×" in body and "| x | 3.00 | 2.00 | 1.50x | 0.50 | 0.50 |" in body
+    assert "| x | force_left_n | 3 | 1.0e-03 | 1.0e-04 |" in body
