@@ -28,6 +28,10 @@ trajectory (an every-step copy of ``fix means`` added to the "after" input): the
 difference per interval relative to the column's peak, and of the summed work.
 
     python benchmarks/fix_cost.py [--steps 2000] [--repeat 2] [--before OLD_TREE] [--write]
+    # whole runs before/after (each under its own tree), then their curves in the table:
+    (cd OLD_TREE && PYTHONPATH=$PWD python NEW_TREE/benchmarks/fix_cost.py --whole /tmp/old)
+    PYTHONPATH=$PWD python benchmarks/fix_cost.py --whole /tmp/new
+    python benchmarks/fix_cost.py --report-only --curves /tmp/old /tmp/new --write
 """
 
 from __future__ import annotations
@@ -46,7 +50,7 @@ import tempfile
 import time
 from pathlib import Path
 
-if "--render" not in sys.argv:  # --render: the older fabmd on PYTHONPATH, not this tree
+if "--render" not in sys.argv and "--whole" not in sys.argv:  # the fabmd on PYTHONPATH
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -327,16 +331,34 @@ formulas most of a step):
   (`clamp_power_rigid.lmp`); identical to round-off;
 * interval means (clamp forces, powers) sampled every 10 steps where the output interval
   is >= 200 steps (the plan rounds the interval to a multiple of 10): a Riemann sum on a
-  10-step grid instead of every step (`driven_outputs.lmp`); its error is the last table.
+  10-step grid instead of every step (`driven_outputs.lmp`); its error: the last two
+  tables.
+
+"""
+
+
+FINDINGS = """\
+Where the time goes (callgrind, instructions per step of the 3D piece's tension input after
+the drag and sum changes but before the 10-step sampling, 40 steps, 47,120 beads): 41 M a
+step, of which the interval means 12 M (the per-bead sums), the drag's addforce 9 M (its
+one formula per bead), bonds 7 M, neighbour lists 5 M, clamp motion 3 M, guards 3 M,
+contact 2 M. The 10-step sampling evaluates the means on one step in ten. What remains of fabmd's
+own: the affine part of the drag (one formula per free bead per step; LAMMPS has no
+built-in force linear in position with a time-dependent coefficient), the clamps' `fix
+move` and the guards. A "fix group" cost below is the difference of two runs on a shared
+machine: about ±0.5 s of noise (the negative ones are noise).
 
 """
 
 
 def report(data: dict) -> str:
-    speedups = [f"{name} {med(v['before'], 'cpu_s') / med(v['after'], 'cpu_s'):.2f}×"
+    speedups = [f"{name} {med(v['before'], 'cpu_s') / med(v['after'], 'cpu_s'):.2f}× "
+                f"(Modify {med(v['before'], 'modify_pct'):.0f} % → "
+                f"{med(v['after'], 'modify_pct'):.0f} % of the loop; the bare input "
+                f"{med(v['bare'], 'modify_pct'):.0f} %)"
                 for name, v in data["runs"].items() if "before" in v]
     return (INTRO + ("Before/after (CPU time): " + ", ".join(speedups) + ".\n\n"
-                     if speedups else "")
+                     if speedups else "") + FINDINGS
             + "The machine (2 cores) was loaded by the other developers' jobs (the 1-minute "
               "load before each run is in the last column): CPU time of the `lmp` process, "
               "not wall time; read ratios, not absolute costs (an idle core is faster).\n\n"
@@ -349,7 +371,68 @@ def report(data: dict) -> str:
             + "\n\n### Interval means sampled every 10 steps against every step "
               f"(same trajectory; loading cut to {data.get('sampling_steps', 0):,} steps, "
               "the 3D piece a quarter)\n\n" + table(SAMPLING_HEADER, sampling_rows(data))
-            + "\n")
+            + "\n" + curves_text(data))
+
+
+def curves_text(data: dict) -> str:
+    """Whole runs before/after (``data["curves"]``, from ``--curves OLD NEW``)."""
+    if not data.get("curves"):
+        return ""
+    rows = [[c["test"], c["column"], f"{c['difference']:.1e}"] for c in data["curves"]]
+    return ("\n### Whole runs, before against after (curve.csv, interpolated at the same "
+            "elongation / angle)\n\n" + data.get("curves_note", "") + "\n\n"
+            + table(["test", "column", "max abs(after - before) / peak"], rows) + "\n")
+
+
+def whole_runs(out: Path) -> None:
+    """A small crimped plain weave (tests/fabrics.py) pulled to 3 % and sheared to 30° in a
+    picture frame with 25 output intervals (long enough to sample the means), run folders
+    ``out/t`` and ``out/pf``; under whichever fabmd is first on the path (``--whole``)."""
+    sys.path.insert(0, str(Path.cwd()))  # that fabmd's tests/fabrics.py
+    from fabmd.engine import Engine
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.crimp import Crimp
+    from fabmd.protocols.picture_frame import PictureFrame
+    from fabmd.protocols.tension import Tension
+    from tests.fabrics import plain_weave_cell
+
+    e = Engine(progress=False)
+    crimped = Crimp(expansion={"warp": -0.02, "weft": -0.02}).run(
+        plain_weave_cell(spacing_m=1e-3, gap=1.0), out / "crimp", engine=e,
+        overwrite=True).model
+    coupon = Coupon(length_m=12e-3, width_m=6e-3, relax=None).run(
+        crimped, out / "ct", engine=e, overwrite=True).model
+    Tension(max_elongation_pct=3.0, samples=25).run(coupon, out / "t", engine=e,
+                                                     overwrite=True)
+    square = Coupon(length_m=8e-3, width_m=8e-3, relax=None).run(
+        crimped, out / "cf", engine=e, overwrite=True).model
+    PictureFrame(max_shear_angle_deg=30, samples=25).run(square, out / "pf", engine=e,
+                                                         overwrite=True)
+
+
+def compare_curves(old: Path, new: Path) -> list[dict]:
+    """Each column of ``curve.csv`` of the run folders ``old/<test>`` and ``new/<test>``
+    (tension ``t``, picture frame ``pf``): the largest difference relative to the peak."""
+    import csv
+
+    import numpy as np
+
+    out = []
+    for test, x in (("t", "elongation_pct"), ("pf", "shear_angle_deg")):
+        cols = {}
+        for key, root in (("old", old), ("new", new)):
+            rows = list(csv.reader(open(root / test / "curve.csv")))
+            cols[key] = {h: np.array([float(r[i]) for r in rows[1:]])
+                         for i, h in enumerate(rows[0])}
+        o, n = cols["old"], cols["new"]
+        for c in o:
+            if c in (x, "step", "time_s", "displacement_m", "frame_angle_deg") or c not in n \
+                    or c.startswith("interval_") or not np.nanmax(np.abs(o[c])):
+                continue
+            y = np.interp(o[x], n[x], n[c])
+            out.append({"test": {"t": "tension", "pf": "picture frame"}[test], "column": c,
+                        "difference": float(np.nanmax(np.abs(y - o[c])) / np.nanmax(np.abs(o[c])))})
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -364,10 +447,20 @@ def main(argv: list[str] | None = None) -> int:
                    help="source tree of the fabmd to compare with (its inputs are rendered "
                         "with it first on the path)")
     p.add_argument("--render", type=Path, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--whole", type=Path, default=None,
+                   help="run the small whole tension and picture frame into this folder "
+                        "(run it with PYTHONPATH and cwd the fabmd tree to use)")
+    p.add_argument("--curves", type=Path, nargs=2, default=None, metavar=("OLD", "NEW"),
+                   help="folders with run folders t/ and pf/ of the same tests by the old "
+                        "and the new fabmd: their curve.csv compared (kept in the JSON)")
+    p.add_argument("--curves-note", default="", help="how the --curves runs were made")
     p.add_argument("--json", type=Path, default=JSON)
     p.add_argument("--write", action="store_true", help="RESULTS.md section")
     p.add_argument("--report-only", action="store_true", help="from the saved JSON")
     args = p.parse_args(argv)
+    if args.whole is not None:  # under whichever fabmd is on the path (cwd: its tree)
+        whole_runs(args.whole)
+        return 0
     if args.render is not None:  # under the older fabmd: its inputs for the same models
         render_inputs(args.render, args.steps, "-before")
         return 0
@@ -383,6 +476,10 @@ def main(argv: list[str] | None = None) -> int:
         root = Path(tempfile.mkdtemp(prefix="fabmd-fix-cost-"))
         data = measure(root, args.steps, args.repeat, args.before, args.sampling_steps)
         data["machine_load_after"] = os.getloadavg()[0]
+        args.json.write_text(json.dumps(data, indent=1) + "\n")
+    if args.curves:
+        data["curves"] = compare_curves(*args.curves)
+        data["curves_note"] = args.curves_note
         args.json.write_text(json.dumps(data, indent=1) + "\n")
     body = report(data)
     print(body)
