@@ -269,8 +269,8 @@ def med(recs: list[dict], key: str) -> float:
     return statistics.median(r[key] for r in recs)
 
 
-HEADER = ["input", "beads", "steps", "run", "CPU [s]", "per bead-step [ns]", "Modify [%]",
-          "load"]
+HEADER = ["input", "beads", "steps", "run", "CPU [s]", "wall [s]", "per bead-step [ns]",
+          "Modify [%]", "load"]
 
 
 def rows(data: dict) -> list[list]:
@@ -280,7 +280,7 @@ def rows(data: dict) -> list[list]:
             beads, steps = recs[0]["atoms"], recs[0]["steps"]
             cpu = med(recs, "cpu_s")
             out.append([name, f"{beads:,}", f"{steps:,}", key, f"{cpu:.2f}",
-                        f"{1e9 * cpu / beads / max(steps, 1):.0f}",
+                        f"{med(recs, 'wall_s'):.1f}", f"{1e9 * cpu / beads / max(steps, 1):.0f}",
                         f"{med(recs, 'modify_pct'):.0f}",
                         " / ".join(f"{r['load']:.1f}" for r in recs)])
     return out
