@@ -102,7 +102,8 @@ def test_default_inputs_have_no_adaptive_commands_and_adaptive_ones_do():
                  "fix             adapt_end all halt", "*v_adapt_factor"):
         assert line in text, line
     # the control runs after the outputs it reads (p_ext, p_damp, ke_free, ebond)
-    assert text.index("compute         p_ext") < text.index("fix             adapt_means")
+    assert text.index("variable        p_ext") < text.index("fix             adapt_means")
+    assert text.index("variable        p_damp") < text.index("fix             adapt_means")
 
 
 def test_picture_frame_input_integrates_the_adapted_speed():

@@ -86,14 +86,17 @@ def test_interval_without_work_is_not_judged():
 def test_drag_acts_on_the_motion_relative_to_the_tools():
     square = plain_weave_cell(spacing_m=1e-3, cells=(2, 2), periodic=False)
     affine = PictureFrame().input_text(PictureFrame().prepare(square))
-    assert "fix             damping free addforce v_drag_fx v_drag_fy v_drag_fz" in affine
+    # -γ v by fix viscous, +γ v_affine by addforce (issue 20: no per-bead formula for -γ v)
+    assert "fix             damping_affine free addforce v_drag_fx v_drag_fy 0.0" in affine
+    assert 'variable        drag_fx atom "v_drag_kxx*(x-(' in affine
     viscous = [line.split()[1] for line in affine.splitlines()
                if line.startswith("fix") and "viscous" in line]
-    assert viscous == ["relax_drag"]  # only the relaxation's, with the frame at rest
+    assert viscous == ["relax_drag", "damping"]
     old = PictureFrame(drag="absolute").input_text(square)
-    assert "fix             damping free viscous" in old
+    assert "fix             damping free viscous" in old and "addforce" not in old
     pull = Tension().input_text(parallel_fibres())
-    assert "addforce" in pull and "v_v*(2*x-" in pull
+    assert "damping_affine free addforce v_drag_fx 0.0 0.0" in pull
+    assert 'drag_kxx equal "' in pull and "*(2*v_v/(" in pull
     with pytest.raises(InputError, match="picture_frame.drag"):
         PictureFrame(drag="relative")
 

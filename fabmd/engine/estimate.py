@@ -1,10 +1,14 @@
 """What a stage will cost, said before it starts: bead count, steps and a rough time.
 
 The time is a rough guide, not a promise: ``SECONDS_PER_BEAD_STEP`` is the cost of
-one bead for one step on one core of the 2-core development machine (LAMMPS-NOTES:
-``pair granular`` 28,672 beads x 500 steps in 1.96 s, ~1.4e-7 s; fabmd's monitors and
-outputs add some), divided by the MPI ranks. Relaxations that stop once quasi-static
-usually end well before their step budget, so the steps and time are upper bounds.
+one bead for one step of a whole fabmd input (contact, bonds, drag, boundary motion,
+interval means, guards) on one core of the 2-core development machine, divided by the
+MPI ranks. Measured (benchmarks/RESULTS.md "Per-step cost of fabmd's fixes", CPU time
+of ``lmp -in`` on one rank, machine loaded by other jobs): 3.1e-7 s for the 3D
+fabric's tension, 3.3e-7 s for the demo's tension and 4.4e-7 s for its picture frame
+(before the cheap drag and sums of issue 20: 4.7e-7, 5.1e-7, 7.4e-7 s; the bare
+contact and bonds 1.4e-7 to 2.3e-7 s). Relaxations that stop once quasi-static usually
+end well before their step budget, so the steps and time are upper bounds.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from pathlib import Path
 from .script import logical_lines, total_run_steps
 
 #: seconds per bead and step on one core (see the module docstring)
-SECONDS_PER_BEAD_STEP = 1.5e-7
+SECONDS_PER_BEAD_STEP = 3.5e-7
 _READ_DATA = re.compile(r"^read_data\s+(\S+)")
 _ATOMS = re.compile(r"^\s*(\d+)\s+atoms\s*$")
 

@@ -7,8 +7,9 @@ drag γ = m/τ on their motion relative to the tools' affine velocity field
 (:mod:`fabmd.scene.drag`; protocols without ``drag`` damp the absolute velocity) and
 writes, through ``lammps_templates/driven_outputs.lmp``:
 
-* ``means.dat`` — forces and powers averaged over each output interval (exact
-  integrals of the external and the damping power);
+* ``means.dat`` — forces and powers averaged over each output interval (integrals of
+  the external and the damping power, sampled every :data:`MEAN_SAMPLE_EVERY` steps
+  when the interval is long: :func:`mean_sample_every`);
 * ``curve.dat`` — clock, boundary displacement(s) and energies at the output steps;
 * the trajectory (``trajectory.h5``, ParaView files; :mod:`fabmd.scene.outputs`)
   with frames on output steps and the last step as the last frame.
@@ -49,6 +50,7 @@ from ..results.curves import curve_difference
 from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
+from ..scene.drag import damping_power as drag_power
 from ..scene.energy import ContactPower
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
@@ -67,6 +69,21 @@ from .driven_outputs import (
 from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
+
+#: the interval means (forces, powers) sample every this many steps once the output
+#: interval is at least :data:`MEAN_SAMPLING_FROM` steps: a Riemann sum on a 10-step grid
+#: instead of every step (issue 20: the per-bead sums were most of a step's cost; the
+#: error is measured in benchmarks/RESULTS.md "Per-step cost of fabmd's fixes")
+MEAN_SAMPLE_EVERY = 10
+MEAN_SAMPLING_FROM = 20 * MEAN_SAMPLE_EVERY
+
+
+def mean_sample_every(every: int) -> int:
+    """Steps between the samples of the interval means for output interval ``every``:
+    :data:`MEAN_SAMPLE_EVERY` where it divides a long enough interval, else every step."""
+    if every >= MEAN_SAMPLING_FROM and every % MEAN_SAMPLE_EVERY == 0:
+        return MEAN_SAMPLE_EVERY
+    return 1
 
 
 @dataclass
@@ -211,8 +228,12 @@ class DrivenTest:
         return cached_plan(self, model, self.derive_plan)
 
     def plan_every(self, duration_s: float, dt: float) -> int:
-        """Output interval [steps]: about ``samples`` curve points over ``duration_s``."""
-        return max(1, math.ceil(duration_s / dt) // self.samples)
+        """Output interval [steps]: about ``samples`` curve points over ``duration_s``; a
+        multiple of :data:`MEAN_SAMPLE_EVERY` when long enough to sample the means."""
+        raw = max(1, math.ceil(duration_s / dt) // self.samples)
+        if raw < MEAN_SAMPLING_FROM:
+            return raw
+        return MEAN_SAMPLE_EVERY * (raw // MEAN_SAMPLE_EVERY)
 
     def plan_damping_time_s(self, duration_s: float) -> float:
         """τ of the drag [s]: ``damping_time_s``, default a tenth of the test."""
@@ -314,14 +335,17 @@ class DrivenTest:
                       print_names: str = "", thermo_values: str = "",
                       damping_power: str | None = None) -> str:
         """Interval means, printed curve and thermo (``driven_outputs.lmp``);
-        ``damping_power``: the drag's power per free bead (default: that of a drag
-        γ·v on the absolute velocity)."""
+        ``damping_power``: LAMMPS text defining ``v_p_damp``, the drag's power on the free
+        beads (:func:`fabmd.scene.drag.damping_power`; default: that of a drag γ·v on the
+        absolute velocity)."""
         every = self.every(model)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
         if damping_power is None:
-            damping_power = f"{self.gamma(model):.10g}*(vx*vx+vy*vy+vz*vz)"
+            damping_power = drag_power("free", self.gamma(model))
         return render("driven_outputs", external_power=external_power, strain_energy=strain,
                       external_ref=external_ref, damping_power=damping_power, every=every,
+                      sample_every=mean_sample_every(every),
+                      samples=every // mean_sample_every(every),
                       mean_values=mean_values, mean_names=mean_names,
                       print_values=print_values, print_names=print_names,
                       thermo_values=thermo_values,
@@ -440,4 +464,14 @@ def relative_change(a, b) -> float | None:
 def clamp_power(group: str = "clamps") -> tuple[str, str]:
     """(LAMMPS text, reference) of the power put in through the beads of ``group``."""
     return render("clamp_power", group=group), "c_p_ext"
+
+
+def rigid_clamp_power(left: str = "clamp_left", right: str = "clamp_right",
+                      left_force: str = "f_left", right_force: str = "f_right"
+                      ) -> tuple[str, str]:
+    """(LAMMPS text, reference) of the power put in by two clamps that move as rigid
+    bodies along x only, from their x forces (computes ``left_force``, ``right_force``)
+    and velocities: −Σ f·v over the clamped beads without a formula per bead."""
+    return (render("clamp_power_rigid", left=left, right=right, left_force=left_force,
+                   right_force=right_force), "v_p_ext")
 

@@ -289,11 +289,9 @@ class PictureFrame(ClampedTest):
         ea = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
-        ax, ay = fmt(g.pin_a[0]), fmt(g.pin_a[1])
         damping, damping_power = self.drag_block(model, AffineField(
-            vx=f"v_frame_lxx*(x-({ax}))+v_frame_lxy*(y-({ay}))",
-            vy=f"v_frame_lxy*(x-({ax}))+v_frame_lxx*(y-({ay}))",
-            tools="frame"))
+            origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xx="v_frame_lxx",
+            xy="v_frame_lxy", yx="v_frame_lxy", yy="v_frame_lxx", tools="frame"))
         adaptive = self.loading_speed.adaptive
         outputs = self.outputs_block(
             model, power, power_ref,

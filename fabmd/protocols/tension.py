@@ -34,7 +34,7 @@ from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
 from ..scene.templates import fmt, render
-from .driven import DrivenResult, clamp_power
+from .driven import DrivenResult, rigid_clamp_power
 from .driven_outputs import energy_columns, read_outputs
 from .end_clamps import EndClampedTest
 
@@ -130,11 +130,11 @@ class Tension(EndClampedTest):
         load = self.loading(model)
         ref_force = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force *= 1e-3 * self.max_elongation_pct
-        power, power_ref = clamp_power("clamps")
+        power, power_ref = rigid_clamp_power()
         # the clamps' inner edges at x_left - u and x_right + u move at -v and +v: the
         # fabric between them stretches affinely along x
         damping, damping_power = self.drag_block(model, AffineField(
-            vx=f"v_v*(2*x-({fmt(left + right)}))/({fmt(right - left)}+2*v_u)", vy="0",
+            origin_m=(0.5 * (left + right), 0.0), xx=f"2*v_v/({fmt(right - left)}+2*v_u)",
             tools="clamps"))
         adaptive = self.loading_speed.adaptive
         gauge = self.gauge_fraction is not None

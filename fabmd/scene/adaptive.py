@@ -123,7 +123,7 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
                    power_floor_w: float, displacement: str = "u") -> str:
     """The LAMMPS text of the adaptive speed (``lammps_templates/adaptive_speed.lmp``):
     it defines ``v_adapt_factor`` (the speed factor) and the halt at the travel; put it
-    after the driven outputs (it reads ``external_ref``, ``c_p_damp``, ``c_ke_free``,
+    after the driven outputs (it reads ``external_ref``, ``v_p_damp``, ``c_ke_free``,
     ``v_ebond``) and make the protocol's speed ``base formula * v_adapt_factor``, its
     displacement ``v_u`` (read back from the boundary) and its time ``v_t``.
 

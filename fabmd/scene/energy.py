@@ -4,8 +4,9 @@ External work = Δ(bond strain energy) + Δ(kinetic energy) + viscous damping
 dissipation + work taken by the contacts (friction, contact damping and contact
 elastic energy). Every term is measured on its own:
 
-* external work and damping dissipation: power summed over the beads every step
-  and averaged over each output interval in LAMMPS (exact integration);
+* external work and damping dissipation: power summed over the beads and averaged
+  over each output interval in LAMMPS (every step, or every 10 steps of a long interval:
+  a Riemann sum on that grid, ``fabmd.protocols.driven.mean_sample_every``);
 * strain and kinetic energy: LAMMPS energies at each output;
 * contact work: the power of the contact forces on the relative motion of every
   contact pair, summed from ``compute pair/local`` between chunks of the
