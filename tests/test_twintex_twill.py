@@ -87,3 +87,12 @@ def test_a_fibre_whose_beads_coincide_is_a_fold_not_a_nan():
     fabric = _fabric(text)
     with pytest.raises(InputError, match="weft-2: its fibre .* would fold"):
         render_loose(dataclasses.replace(fabric, lift_m=1.646e-3))
+
+
+def test_the_two_families_fibres_differ_in_diameter():
+    """Why the shipped scene stops at the crimp: the within-family law takes one bead
+    diameter, and the inscribed fibres of the two sections are 0.497 / 0.413 mm."""
+    fabric = load_scene(SCENE).fabric
+    d = {fam: spec.packing()[1] for fam, spec in fabric.specs().items()}
+    assert d["warp"] == pytest.approx(0.497e-3, rel=2e-3)
+    assert d["weft"] == pytest.approx(0.413e-3, rel=2e-3)
