@@ -39,7 +39,7 @@ def test_table1_areal_density_is_refused_with_the_arithmetic():
 
 
 def test_shipped_twill_builds_at_the_woven_widths_fast():
-    """The loose state the search finds (lift fixed here; the search is the slow test):
+    """The loose state the search finds (lift fixed here; the search is the next test):
     no overlap, the datasheet widths kept, yarn Vf <= 0.8, mass above the straight yarns."""
     fabric = load_scene(SCENE).fabric
     assert fabric.warp.width_m / fabric.warp.spacing_m == pytest.approx(0.90, abs=0.005)
@@ -56,7 +56,6 @@ def test_shipped_twill_builds_at_the_woven_widths_fast():
     assert info["areal_density_kg_m2"] > straight
 
 
-@pytest.mark.slow
 def test_shipped_twill_loose_state_search():
     """clearance "auto": narrower widths fold at every lift, so the search keeps the full
     widths at the lift with the widest gap below the half clearance it asks for."""
@@ -69,7 +68,6 @@ def test_shipped_twill_loose_state_search():
     assert 0 < info["clearance_m"] < 0.5 * scene.fabric.clearance_m
 
 
-@pytest.mark.slow
 def test_no_loose_state_names_the_overlap_and_the_fold():
     """Sections at Vf 0.6 (the plain weave's): lifting folds a yarn before the crossings
     clear; the search tries every width and says both, instead of stopping at the fold."""
