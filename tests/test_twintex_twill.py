@@ -14,7 +14,7 @@ from fabmd.model.fabric_model import render_fabric, render_loose
 from fabmd.scenefile import load_scene, parse_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "twintex_twill.toml"
-#: the lift the loose-state search of the shipped scene ends at [m] (slow test below)
+#: the lift the loose-state search of the shipped scene ends at [m] (tested below)
 FOUND_LIFT_M = 1.477e-3
 
 
