@@ -1,19 +1,23 @@
-"""Simulated against measured: the Twintex plain weave of the woven-fabric benchmark.
+"""Simulated against measured: the Twintex fabrics of the woven-fabric benchmark.
 
-The scene (``examples/twintex_plain.toml``) is written from the datasheet values of
-Cao et al. (2008), Table 1, and a friction coefficient that is no fit (docs/
-validation_sources.md); nothing in it is tuned to the shear curves it is compared with
-here (``benchmarks/data/cao2008_plain_weave.csv``: the seven laboratories' picture-frame
-curves, digitised, min / max / median per angle).
+The scenes (``examples/twintex_plain.toml``, ``examples/twintex_twill.toml``) are written
+from the datasheet values of Cao et al. (2008), Table 1, and a friction coefficient that is
+no fit (docs/validation_sources.md); nothing in them is tuned to the shear curves they are
+compared with here, each against its own fabric's (``FABRICS``: the digitised picture-frame
+curves, min / max / median per angle — the plain weave's seven laboratories in
+``benchmarks/data/cao2008_plain_weave.csv``, the balanced twill's four curves in
+``benchmarks/data/cao2008_balanced_twill.csv``).
 
 Each ``--scene`` is crimped as a periodic cell (its ``[crimp]``), then sheared in the
 picture frame (its ``[picture_frame]``) and, with ``--compaction``, pressed to its
 datasheet pressure (thickness against the datasheet's). Results are kept by scene title
 in ``benchmarks/validation.json`` so variants (contact laws) accumulate; ``--from DIR``
-adds a finished ``fabmd test picture-frame`` folder without running it again.
+adds a finished ``fabmd test picture-frame`` folder without running it again (``--fabric``
+says which fabric's measurements it is compared with; a ``--scene``'s weave says it).
 
     python benchmarks/validation.py --scene examples/twintex_plain.toml --out /tmp/val
     python benchmarks/validation.py --from /tmp/val/pf --label "stiff contact" --write
+    python benchmarks/validation.py --from /tmp/twill/pf --fabric twill --label "..." --write
     python benchmarks/validation.py --write          # the section from validation.json
 """
 
@@ -24,22 +28,42 @@ import csv
 import json
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _results import table, update_section  # noqa: E402
 
-DATA = HERE / "data" / "cao2008_plain_weave.csv"
 STORE = HERE / "validation.json"
 ANGLES = (10, 20, 30, 40)
-#: Cao et al. (2008) p. 1045: "approximately 45 deg where locking began"
-MEASURED_LOCKING_DEG = 45.0
 
 
-def measured(test: str = "picture_frame") -> dict[int, dict[str, float]]:
-    """Per angle: min, max, median F_norm [N/mm] of the laboratories (the CSV)."""
-    rows = [line for line in DATA.read_text().splitlines() if not line.startswith("#")]
+@dataclass(frozen=True)
+class Measured:
+    """One fabric's measurements: the CSV, who measured, the locking angle stated."""
+
+    title: str
+    data: Path
+    sources: str
+    #: the locking angle the paper states [deg]; None where it states none
+    locking_deg: float | None
+    locking_note: str
+
+
+FABRICS = {
+    # Cao et al. (2008) p. 1045: "approximately 45 deg where locking began"
+    "plain": Measured("Twintex plain weave (TPEET22XXX)",
+                      HERE / "data" / "cao2008_plain_weave.csv", "7 laboratories", 45.0, "≈ 45"),
+    "twill": Measured("Twintex balanced 2/2 twill (TPEET44XXX)",
+                      HERE / "data" / "cao2008_balanced_twill.csv",
+                      "4 curves (UML, UT, KUL 1st / 3rd run)", None, "not stated"),
+}
+
+def measured(test: str = "picture_frame", fabric: str = "plain") -> dict[int, dict[str, float]]:
+    """Per angle: min, max, median F_norm [N/mm] of the laboratories (the fabric's CSV)."""
+    rows = [line for line in FABRICS[fabric].data.read_text().splitlines()
+            if not line.startswith("#")]
     out = {}
     for row in csv.DictReader(rows):
         if row["test"] == test:
@@ -76,7 +100,9 @@ def run_scene(scene_path: Path, out: Path, compaction: bool) -> dict:
     scene = load_scene(scene_path)
     t0 = time.perf_counter()
     crimp = run_crimp(scene, out / "crimp", form="cell")
+    weave = scene.fabric.architecture
     rec = {"scene": str(scene_path), "title": scene.title,
+           "fabric": "twill" if getattr(weave, "name", "").startswith("twill") else "plain",
            "crimp": {k: crimp.summary.get(k) for k in ("wall_s",)},
            "crimp_tension": crimp.summary.get("tension", {}).get("per_family")}
     run_test(scene, "picture-frame", out / "pf", crimped=out / "crimp")
@@ -90,16 +116,27 @@ def run_scene(scene_path: Path, out: Path, compaction: bool) -> dict:
 
 
 def section(store: dict) -> str:
-    """The RESULTS.md section: one row per variant, measured ranges beside."""
-    ref = measured()
+    """The RESULTS.md section: per fabric, one row per variant, its measured ranges beside."""
+    runs = {k: v for k, v in store.items() if not k.startswith("_")}
+    parts = []
+    for key, fabric in FABRICS.items():
+        mine = {k: v for k, v in runs.items() if v.get("fabric", "plain") == key}
+        reading = store.get("_reading" if key == "plain" else f"_reading_{key}")
+        parts.append(f"### {fabric.title}\n\n" + _fabric_tables(key, mine, reading))
+    return "\n\n".join(parts)
+
+
+def _fabric_tables(key: str, runs: dict, reading: str | None) -> str:
+    """One fabric's tables: measured and simulated F_norm, ratios, notes, reading."""
+    fabric = FABRICS[key]
+    ref = measured(fabric=key)
     header = ["model"] + [f"F_norm {a}° [N/mm]" for a in ANGLES] + [
         "locking [°]", "flagged intervals", "beads", "wall [s]"]
-    rows = [["measured, 7 laboratories: min – max (median)"]
+    rows = [[f"measured, {fabric.sources}: min – max (median)"]
             + [f"{ref[a]['min_n_mm']:.3f} – {ref[a]['max_n_mm']:.3f} "
                f"({ref[a]['median_n_mm']:.3f})" for a in ANGLES]
-            + [f"≈ {MEASURED_LOCKING_DEG:g}", "—", "—", "—"]]
+            + [fabric.locking_note, "—", "—", "—"]]
     ratio_rows = []
-    runs = {k: v for k, v in store.items() if not k.startswith("_")}
     for label, rec in runs.items():
         pf = rec["picture_frame"]
         vals = [pf["f_norm_n_mm"].get(str(a)) for a in ANGLES]
@@ -113,15 +150,17 @@ def section(store: dict) -> str:
             ("—" if v is None else f"{v / ref[a]['median_n_mm']:.3g}")
             + ("" if v is None or ref[a]["min_n_mm"] <= v <= ref[a]["max_n_mm"]
                else " (outside)") for a, v in zip(ANGLES, vals, strict=True)])
-    text = table(header, rows) + "\n\nSimulated over the measured median "\
-        "(\"outside\": beyond the laboratories' range):\n\n"
-    text += table(["model"] + [f"{a}°" for a in ANGLES], ratio_rows)
+    text = table(header, rows)
+    if ratio_rows:
+        text += "\n\nSimulated over the measured median " \
+            "(\"outside\": beyond the laboratories' range):\n\n"
+        text += table(["model"] + [f"{a}°" for a in ANGLES], ratio_rows)
     notes = [f"- **{label}**: {rec['note']}" for label, rec in runs.items()
              if rec.get("note")]
     if notes:
         text += "\n\n" + "\n".join(notes)
-    if store.get("_reading"):
-        text += "\n\n" + store["_reading"]
+    if reading:
+        text += "\n\n" + reading
     return text
 
 
@@ -136,21 +175,29 @@ def main(argv=None) -> int:
                    help="a finished picture-frame folder to add (with --label)")
     p.add_argument("--label", help="row label (default: the scene's title)")
     p.add_argument("--note", default="", help="one line on how the row was made")
-    p.add_argument("--reading", help="the section's closing paragraph (kept in the store)")
+    p.add_argument("--fabric", choices=sorted(FABRICS),
+                   help="the measurements a --from folder is compared with (default plain; "
+                        "a --scene's weave decides for it)")
+    p.add_argument("--reading", help="the fabric's closing paragraph (kept in the store)")
     p.add_argument("--write", action="store_true", help="write the RESULTS.md section")
     args = p.parse_args(argv)
 
     store = json.loads(STORE.read_text()) if STORE.exists() else {}
+    fabric = args.fabric or "plain"
     if args.reading:
-        store["_reading"] = args.reading
+        store["_reading" if fabric == "plain" else f"_reading_{fabric}"] = args.reading
     if args.folder:
         rec = {"picture_frame": picture_frame_record(args.folder), "note": args.note}
+        if fabric != "plain":
+            rec["fabric"] = fabric
         store[args.label or str(args.folder)] = rec
     for i, scene in enumerate(args.scene):
         if args.out is None:
             p.error("--scene needs --out")
         rec = run_scene(scene, args.out / f"{i}-{scene.stem}", args.compaction)
         rec["note"] = args.note
+        if args.fabric:
+            rec["fabric"] = args.fabric
         store[args.label or rec["title"]] = rec
     STORE.write_text(json.dumps(store, indent=1) + "\n")
     text = section(store)

@@ -239,6 +239,11 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
         for _ in range(REFINE_STEPS):  # make every chord the same length
             closing = pos[:1] + _period_shift(path) if periodic else pos[:0]
             chords = np.linalg.norm(np.diff(np.vstack([pos, closing]), axis=0), axis=1)
+            if not np.all(chords > 0):  # the fibre's offset curve has a cusp
+                raise InputError(f"yarn {path.name}: its fibre {1e3 * through:.3g} mm from the "
+                                 f"centreline would fold (two of its beads coincide where the "
+                                 f"yarn bends); reduce the yarn height or fabric.plateau, or "
+                                 f"increase the spacing of the yarns it crosses")
             if periodic:
                 chord = float(chords.mean())
             step_sigma = np.diff(np.append(targets, total if periodic else targets[-1:]))

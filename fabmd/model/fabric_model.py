@@ -42,6 +42,8 @@ from .overlap import ClosestApproach, closest_approach
 REST_LENGTH_TOLERANCE = 1e-9
 #: a yarn folds when curvature × largest fibre offset reaches this
 FOLD_LIMIT = 0.95
+#: the words of every fold refusal (the loose-state search recognises them)
+FOLD_WORDS = "would fold"
 
 
 @dataclass(frozen=True)
@@ -130,54 +132,85 @@ def render_fabric(fabric: Fabric, discretisation: Discretisation | None = None, 
     narrower yarns are taller, same area, and spread again during the crimp) the crossing
     yarns are lifted apart (``lift_m``, :data:`LIFT_TRIES` growing tries, then
     :data:`LIFT_BISECTIONS` halvings) until no yarns overlap and the smallest gap
-    between yarns is :data:`AUTO_GAP_FRACTION` of the clearance. ``info`` records
-    ``lift_m``, ``loose_width_factor`` and ``auto_clearance_tries``.
+    between yarns is :data:`AUTO_GAP_FRACTION` of the clearance. A width at which a
+    lift folds a yarn is left for the next (more lift bends tighter). Where no try
+    reaches that gap, the try without overlap with the largest gap is taken
+    (``info["auto_clearance_gap_short"]``: true). ``info`` records ``lift_m``,
+    ``loose_width_factor`` and ``auto_clearance_tries``.
     """
     if not (fabric.auto_clearance and check):
         return render_loose(fabric, discretisation, check=check, pad_fraction=pad_fraction)
-
-    def attempt(trial: Fabric) -> BeadModel | None:
-        try:
-            model = render_loose(trial, discretisation, check=True, pad_fraction=pad_fraction)
-        except InputError as exc:
-            if "overlap" not in str(exc):
-                raise
-            attempt.last = str(exc)
-            return None
-        gap = model.info["clearance_m"]
-        if gap is not None and gap < AUTO_GAP_FRACTION * trial.clearance_m:
-            pair = " and ".join(model.info["clearance_pair"] or ())
-            attempt.last = (f"yarns {pair} come within {1e3 * gap:.3g} mm, less than "
-                            f"{AUTO_GAP_FRACTION:g} x the clearance "
-                            f"{1e3 * trial.clearance_m:.3g} mm")
-            return None
-        return model
-
-    tries = 0
+    search = _LooseSearch(discretisation, pad_fraction)
     factors = LOOSE_WIDTH_FACTORS
     for factor in factors:
         base = fabric.with_loose_width(factor)
         step = 0.25 * min(s.height_m for s in base.specs().values())
         lifts = [0.0] + [step * LIFT_GROWTH ** k for k in range(LIFT_TRIES - 1)]
+        search.folded, search.factor = "", factor
         for k, lift in enumerate(lifts):
-            tries += 1
-            model = attempt(dataclasses.replace(base, lift_m=fabric.lift_m + lift))
+            model = search.attempt(dataclasses.replace(base, lift_m=fabric.lift_m + lift))
+            if search.folded:
+                break
             if model is None:
                 continue
             low, high = (lifts[k - 1], lift) if k else (0.0, 0.0)
             for _ in range(LIFT_BISECTIONS if k else 0):
-                tries += 1
                 mid = 0.5 * (low + high)
-                found = attempt(dataclasses.replace(base, lift_m=fabric.lift_m + mid))
+                found = search.attempt(dataclasses.replace(base, lift_m=fabric.lift_m + mid))
                 if found is None:
                     low = mid
                 else:
                     high, model = mid, found
-            model.info.update(auto_clearance_tries=tries, loose_width_factor=factor)
+            model.info.update(auto_clearance_tries=search.tries, loose_width_factor=factor)
             return model
-    raise InputError(f"{attempt.last} (clearance \"auto\": no loose state found with loose "
-                     f"widths down to {factors[-1]:g} of the given ones and lifts up to "
-                     f"{1e3 * lifts[-1]:.3g} mm)")
+    if search.near is not None:
+        _, factor, model = search.near
+        model.info.update(auto_clearance_tries=search.tries, loose_width_factor=factor,
+                          auto_clearance_gap_short=True)
+        return model
+    folded = f"; at loose width {factors[-1]:g}: {search.folded}" if search.folded else ""
+    raise InputError(f"{search.last or 'no loose state'}{folded} (clearance \"auto\": no loose "
+                     f"state found with loose widths down to {factors[-1]:g} of the given ones "
+                     f"and lifts up to {1e3 * lifts[-1]:.3g} mm: a yarn overlaps its crossing "
+                     f"yarns until lifting or narrowing bends some yarn tighter than its fibres "
+                     f"reach)")
+
+
+class _LooseSearch:
+    """One try of the loose-state search and what the tries so far found."""
+
+    def __init__(self, discretisation: Discretisation | None, pad_fraction: float):
+        self.discretisation, self.pad_fraction = discretisation, pad_fraction
+        self.tries, self.factor = 0, 1.0
+        self.last, self.folded = "", ""
+        #: (gap [m], loose width factor, model): the widest-gap try without overlap
+        self.near: tuple | None = None
+
+    def attempt(self, trial: Fabric) -> BeadModel | None:
+        """The model of ``trial`` if its yarns keep the gap, else None (and why)."""
+        self.tries += 1
+        try:
+            model = render_loose(trial, self.discretisation, check=True,
+                                 pad_fraction=self.pad_fraction)
+        except InputError as exc:
+            text = str(exc)
+            if FOLD_WORDS in text:
+                self.folded = f"{text.split(':')[0]} at a lift of {1e3 * trial.lift_m:.3g} mm"
+                return None
+            if "overlap" not in text:
+                raise
+            self.last = text
+            return None
+        gap = model.info["clearance_m"]
+        if gap is not None and gap < AUTO_GAP_FRACTION * trial.clearance_m:
+            pair = " and ".join(model.info["clearance_pair"] or ())
+            self.last = (f"yarns {pair} come within {1e3 * gap:.3g} mm, less than "
+                         f"{AUTO_GAP_FRACTION:g} x the clearance "
+                         f"{1e3 * trial.clearance_m:.3g} mm")
+            if gap > 0 and (self.near is None or gap > self.near[0]):
+                self.near = (gap, self.factor, model)
+            return None
+        return model
 
 
 def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *,
