@@ -1,12 +1,12 @@
 """Simulated against measured: the Twintex fabrics of the woven-fabric benchmark.
 
-The scenes (``examples/twintex_plain.toml``, ``examples/twintex_twill.toml``) are written
-from the datasheet values of Cao et al. (2008), Table 1, and a friction coefficient that is
-no fit (docs/validation_sources.md); nothing in them is tuned to the shear curves they are
-compared with here, each against its own fabric's (``FABRICS``: the digitised picture-frame
-curves, min / max / median per angle — the plain weave's seven laboratories in
-``benchmarks/data/cao2008_plain_weave.csv``, the balanced twill's four curves in
-``benchmarks/data/cao2008_balanced_twill.csv``).
+The scenes (``examples/twintex_plain.toml``, ``benchmarks/scenes/twintex_twill.toml``)
+are written from the datasheet values of Cao et al. (2008), Table 1, and a friction
+coefficient that is no fit (docs/validation_sources.md); nothing in them is tuned to the
+shear curves they are compared with here, each against its own fabric's (``FABRICS``: the
+digitised picture-frame curves, min / max / median per angle — the plain weave's seven
+laboratories in ``benchmarks/data/cao2008_plain_weave.csv``, the balanced twill's four
+curves in ``benchmarks/data/cao2008_balanced_twill.csv``).
 
 Each ``--scene`` is crimped as a periodic cell (its ``[crimp]``), then sheared in the
 picture frame (its ``[picture_frame]``) and, with ``--compaction``, pressed to its

@@ -1,5 +1,6 @@
-"""The Twintex balanced 2/2 twill of Cao et al. (2008), Table 1 (examples/twintex_twill.toml):
-a dense fabric (width/spacing 0.90 warp, 0.87 weft) and what its loose state needs."""
+"""The Twintex balanced 2/2 twill of Cao et al. (2008), Table 1
+(benchmarks/scenes/twintex_twill.toml; not an example: it does not crimp yet): a dense
+fabric (width/spacing 0.90 warp, 0.87 weft) and what its loose state needs."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from fabmd.errors import InputError
 from fabmd.model.fabric_model import render_fabric, render_loose
 from fabmd.scenefile import load_scene, parse_scene
 
-SCENE = Path(__file__).resolve().parents[1] / "examples" / "twintex_twill.toml"
+SCENE = Path(__file__).resolve().parents[1] / "benchmarks" / "scenes" / "twintex_twill.toml"
 #: the lift the loose-state search of the shipped scene ends at [m] (tested below)
 FOUND_LIFT_M = 1.477e-3
 
