@@ -62,6 +62,30 @@ limit), a ``table`` on same-family type pairs the excess (a file in the run fold
 pair/local`` under ``hybrid/overlay`` loses the tangential force of overlaid pairs:
 :mod:`fabmd.scene.energy`).
 
+Crossing per crossing (``crossing = "per_crossing"``, opt-in; default ``"per_length"``).
+A crossing is a point contact, so a k_n ∝ l0 makes its force follow the bead spacing
+(above). Averaged over the two chains' registers (shifts along each chain, uniform over
+one spacing) the bead pairs of two straight chains crossing at angle θ fill the plane
+with density 1/(l0²·sin θ), so with Hooke pairs k_n = c·l0² the mean force is an integral
+that no longer sees l0:
+
+    F(δ) = (c/sin θ)·∫ (d − r)·(g/r) dA = π·c·g·δ²/sin θ     (g = d − δ: axis gap),
+
+and with c = 2k'/d (the per-length k_n at s/d = 0.5, where both forms agree)
+
+    F(δ) = 2π·k'·δ²·(1 − δ/d)/sin θ   [N],
+
+a law of the crossing alone: the plain-weave example's default k' = 8.9·10⁹ Pa
+(d = 0.333 mm) gives 5.4 N at δ = 0.03 d and 90°, at any bead spacing (:func:`crossing_law_force_n`;
+``tests/test_contact_crossing.py``: Python sums and LAMMPS probes at s/d 0.5 and 0.25).
+One register differs from the mean (the crossing's bumpiness). Every pair of different
+families gets k_n = 2k'·l0²/d (l0 the widest spacing, d the smallest diameter: exact for
+one bead kind); parallel fibres of different families then carry k'·δ·(2l0/d) per length,
+so this needs per-type-pair coefficients — a split contact or the within-family law, whose
+same-family pairs stay per unit length (refused otherwise). The time step follows the new
+k_n (half the per-length one at s/d 0.25, twice at s/d 1). The within-family law's hard
+core stays k'·l0 per pair (parallel chains).
+
 Older settings still work and are flagged as discretisation-dependent:
 ``stiffness_factor`` (k_n = factor·E·A/l0, transverse stiffness per length ∝ 1/l0²)
 and ``stiffness_n_per_m`` (a fixed k_n per bead pair, ∝ 1/l0 per length).
@@ -95,6 +119,11 @@ from .beads import BeadParameters
 from .bundle_contact import TABLE_POINTS, BundleContact
 
 NORMAL_MODELS = ("hooke", "hertz")
+#: ``ContactModel.crossing``: k_n of pairs of different families ∝ l0 (per unit length of
+#: fibre) or ∝ l0² (a force law per crossing; module docstring "Crossing per crossing")
+CROSSING_FORMS = ("per_length", "per_crossing")
+#: s/d at which the per-crossing k_n = k'·l0²/(ratio·d) equals the per-length k'·l0
+CROSSING_REFERENCE_RATIO = 0.5
 #: the within-family law's table file in the run folder, and its section keyword
 WITHIN_FAMILY_TABLE = "within_family.table"
 WITHIN_FAMILY_KEYWORD = "WITHIN_FAMILY"
@@ -123,19 +152,43 @@ def _normal_stiffness(owner: str, per_length_pa: float | None, factor: float | N
     return k_line * max(b.bond_length_m for b in beads)
 
 
+def crossing_pair_stiffness_n_per_m(stiffness_pa: float, spacing_m: float,
+                                    diameter_m: float, crossing: str = "per_length") -> float:
+    """k_n of one bead pair of two crossing chains [N/m]: k'·l0 (``"per_length"``) or
+    k'·l0²/(0.5·d) = 2k'·l0²/d (``"per_crossing"``, module docstring)."""
+    inputs.one_of("contact.crossing", crossing, CROSSING_FORMS)
+    if crossing == "per_length":
+        return stiffness_pa * spacing_m
+    return stiffness_pa * spacing_m**2 / (CROSSING_REFERENCE_RATIO * diameter_m)
+
+
+def crossing_law_force_n(stiffness_pa: float, diameter_m: float, overlap_m: float,
+                         angle_deg: float = 90.0) -> float:
+    """Force [N] of one crossing with ``crossing = "per_crossing"``, averaged over the
+    chains' registers: 2π·k'·δ²·(1 − δ/d)/sin θ (exact for Hooke pairs while δ < d;
+    module docstring), independent of the bead spacing."""
+    delta = inputs.in_range("overlap_m", overlap_m, 0.0, diameter_m, high_open=True)
+    sine = math.sin(math.radians(inputs.in_range("angle_deg", angle_deg, 0.0, 180.0,
+                                                 low_open=True, high_open=True)))
+    return 2.0 * math.pi * stiffness_pa * delta**2 * (1.0 - delta / diameter_m) / sine
+
+
 def crossing_force_n(stiffness_pa: float, spacing_m: float, diameter_m: float,
                      overlap_m: float, angle_deg: float = 90.0, shift_m: float = 0.0,
-                     shift_b_m: float = 0.0) -> float:
+                     shift_b_m: float = 0.0, crossing: str = "per_length") -> float:
     """Normal force [N] between two straight bead chains crossing at ``angle_deg`` with
-    Hooke bead pairs k_n = k'·l0, pressed until their axes are d − ``overlap_m`` apart.
+    Hooke bead pairs k_n (:func:`crossing_pair_stiffness_n_per_m` of ``crossing``: k'·l0
+    by default), pressed until their axes are d − ``overlap_m`` apart.
 
     Sums k_n·(d − r) over bead pairs in contact (force along the axis-to-axis
     normal, r = pair distance). ``shift_m``/``shift_b_m``: offsets of the bead
     lattices from the crossing point along each chain. Used to show how a crossing
-    scales with the spacing (a point contact: ∝ l0 at small overlap).
+    scales with the spacing (per length, a point contact: ∝ l0 at small overlap; per
+    crossing, averaged over the shifts: :func:`crossing_law_force_n` at any spacing).
     """
     import numpy as np
 
+    k_pair = crossing_pair_stiffness_n_per_m(stiffness_pa, spacing_m, diameter_m, crossing)
     gap = diameter_m - overlap_m
     n = int(np.ceil(2 * diameter_m / spacing_m)) + 2
     s = spacing_m * np.arange(-n, n + 1)
@@ -144,7 +197,7 @@ def crossing_force_n(stiffness_pa: float, spacing_m: float, diameter_m: float,
     c = math.cos(math.radians(angle_deg))
     r = np.sqrt(gap * gap + a * a + b * b - 2 * a * b * c)
     pen = np.clip(diameter_m - r, 0.0, None)
-    return float(stiffness_pa * spacing_m * np.sum(pen * gap / r))
+    return float(k_pair * np.sum(pen * gap / r))
 
 
 @dataclass(frozen=True)
@@ -183,6 +236,11 @@ class ContactModel:
             the same family follow the compaction law itself (nonlinear, hard core past the
             packing limit; module docstring, "Within-family law"); None (default): not.
             Excludes ``within_family_stiffness_pa`` (the law sets the linear part).
+        crossing: k_n of pairs of different families: ``"per_length"`` (default, k'·l0)
+            or ``"per_crossing"`` (2k'·l0²/d: a crossing of two fibres carries
+            2π·k'·δ²·(1 − δ/d)/sin θ whatever the bead spacing, averaged over register;
+            module docstring "Crossing per crossing"). ``"per_crossing"`` needs a split
+            contact (``within_family_stiffness_pa`` or ``within_family_law``).
     """
 
     friction: float = 0.3
@@ -197,9 +255,16 @@ class ContactModel:
     overlap_limit: float = 0.5
     within_family_stiffness_pa: float | None = None
     within_family_law: BundleContact | None = None
+    crossing: str = "per_length"
 
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
+        inputs.one_of("contact.crossing", self.crossing, CROSSING_FORMS)
+        if self.crossing == "per_crossing" and not self.split:
+            raise InputError(
+                "contact.crossing = 'per_crossing' needs per-type-pair coefficients (give "
+                "within_family_stiffness_pa or within_family: same-family pairs stay per "
+                "unit length), got neither")
         if self.within_family_law is not None:
             if not isinstance(self.within_family_law, BundleContact):
                 raise InputError("contact.within_family_law must be a BundleContact, got "
@@ -242,7 +307,12 @@ class ContactModel:
                         1.0, low_open=True)
 
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
-        """Linear(ised) normal stiffness k_n [N/m] (Hertz: secant at the reference overlap)."""
+        """Linear(ised) normal stiffness k_n [N/m] (Hertz: secant at the reference overlap);
+        of a split contact, that of pairs of different families (``crossing``)."""
+        if self.crossing == "per_crossing":  # split, Hooke, per length (checked when built)
+            return crossing_pair_stiffness_n_per_m(
+                self.crossing_stiffness_pa(beads), max(b.bond_length_m for b in beads),
+                min(b.diameter_m for b in beads), self.crossing)
         return _normal_stiffness("contact", self.normal_stiffness_pa, self.stiffness_factor,
                                  self.stiffness_n_per_m, beads)
 
