@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import hashlib
 import json
 import math
 import re
@@ -75,6 +76,8 @@ LEVELS: dict[str, tuple] = {"fibres": (1, 7, 19), "sd": (0.5, 0.25), "cells": (3
 #: the criterion of issue #16 between the two finest levels of a refinement
 TOLERANCE = 0.05
 LOCKING_TOLERANCE_DEG = 2.0
+#: longest JSON file name (most file systems: 255 bytes)
+NAME_MAX = 255
 #: optical gauge strains past the toe of the relieved coupon (its warp keeps the woven crimp,
 #: ~3.7 % at 7 fibres; the gauge reaches ~5.8 % when the clamps reach the example's 6 %)
 TENSION_STRAINS_PCT = (4.0, 4.5, 5.0)
@@ -671,7 +674,11 @@ def scene_settings(pairs: list[str]) -> dict:
 def data_path_for(settings_text: str) -> Path:
     """The JSON of a study: one per ``--set`` (the default contact's has no tag)."""
     tag = re.sub(r"[^A-Za-z0-9_.-]+", "_", settings_text).strip("_")
-    return HERE / (f"convergence-{tag}.json" if tag else "convergence.json")
+    name = f"convergence-{tag}.json" if tag else "convergence.json"
+    if len(name) > NAME_MAX:  # many --set: a file name the file system takes, still one per study
+        digest = hashlib.sha1(settings_text.encode()).hexdigest()[:12]
+        name = f"{name[:NAME_MAX - 18]}-{digest}.json"
+    return HERE / name
 
 
 def parse_levels(items: list[str] | None) -> dict[str, tuple]:

@@ -208,3 +208,18 @@ def test_convergence_compaction_options_booleans_datasheet_and_monotone():
     text = bench.runs_table("compaction", runs, base, {"fibres": (7,)})
     assert "h 4.14 kPa (datasheet) [mm]" in text and "yes; thickness not monotone" in text
     assert "| 1.25 |" in text
+
+
+def test_convergence_json_name_fits_the_file_system():
+    """Many ``--set`` made a JSON name longer than 255 bytes (OSError: File name too long);
+    a long name is cut and keeps a digest of the settings, short names are unchanged."""
+    bench = load_convergence()
+    assert bench.data_path_for("").name == "convergence.json"
+    assert bench.data_path_for("contact.friction=0.1").name == \
+        "convergence-contact.friction_0.1.json"
+    long_a = " ".join(f"compaction.key{i}=value{i}" for i in range(20))
+    long_b = long_a + " picture_frame.max_shear_angle_deg=50"
+    a, b = bench.data_path_for(long_a), bench.data_path_for(long_b)
+    assert len(a.name) <= 255 and len(b.name) <= 255 and a.name.endswith(".json")
+    assert a != b and a == bench.data_path_for(long_a)
+    assert not a.exists() or a.is_file()  # stat works on the name
