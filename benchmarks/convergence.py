@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import hashlib
 import json
 import math
 import re
@@ -62,6 +63,7 @@ from fabmd.examples_dir import example_scene  # noqa: E402
 from fabmd.scenefile import Scene, parse_scene  # noqa: E402
 from fabmd.schema import merged  # noqa: E402
 from fabmd.stages import section as stage_section  # noqa: E402
+from fabmd.units import quantity  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = "plain_weave.toml"
@@ -74,6 +76,8 @@ LEVELS: dict[str, tuple] = {"fibres": (1, 7, 19), "sd": (0.5, 0.25), "cells": (3
 #: the criterion of issue #16 between the two finest levels of a refinement
 TOLERANCE = 0.05
 LOCKING_TOLERANCE_DEG = 2.0
+#: longest JSON file name (most file systems: 255 bytes)
+NAME_MAX = 255
 #: optical gauge strains past the toe of the relieved coupon (its warp keeps the woven crimp,
 #: ~3.7 % at 7 fibres; the gauge reaches ~5.8 % when the clamps reach the example's 6 %)
 TENSION_STRAINS_PCT = (4.0, 4.5, 5.0)
@@ -216,8 +220,23 @@ def values_of(test: str, summary: dict, curve: dict) -> dict:
         return {**{k: None if v is None else v / 1e3 for k, v in forces.items()},
                 "locking": s.get("locking_angle_deg")}
     h = s["thickness_at_pressure_m"]
+    pressures = PRESSURES_KPA + datasheet_kpa(s.get("datasheet_pressure_pa"))
     return {f"h{p:g}kPa": None if h.get(f"{1e3 * p:g}") is None else 1e3 * h[f"{1e3 * p:g}"]
-            for p in PRESSURES_KPA}
+            for p in pressures}
+
+
+def datasheet_kpa(pressure_pa) -> tuple[float, ...]:
+    """The datasheet pressure [kPa] as one more compaction level (none: ())."""
+    return () if pressure_pa is None else (float(pressure_pa) / 1e3,)
+
+
+def add_datasheet_column(pressure_pa) -> None:
+    """Show the thickness at the scene's ``[compaction] datasheet_pressure_pa`` too (a
+    column after the fixed pressures; the convergence criterion judges it like them)."""
+    if pressure_pa is not None:
+        pressure_pa = quantity(pressure_pa, "pressure", "compaction.datasheet_pressure_pa")
+    for p in datasheet_kpa(pressure_pa):
+        QUANTITIES["compaction"].setdefault(f"h{p:g}kPa", (f"h {p:g} kPa (datasheet)", "mm"))
 
 
 LOOP = re.compile(r"^Loop time of \S+ on \d+ procs for (\d+) steps", re.M)
@@ -265,6 +284,8 @@ def run_variant(v: Variant, data: dict, base: dict, root: Path, crimps: dict,
     curve = read_csv(Path(summary["results"]) / "curve.csv")
     record.update(beads=summary["coupon_beads"], steps=_steps(summary),
                   values=values_of(v.test, summary, curve), **verdict_of(s), folder=str(out))
+    if "thickness_monotone" in s:  # compaction: does the loading branch only get thinner?
+        record["thickness_monotone"] = s["thickness_monotone"]
     if "optical_gauge" in s:  # tension: the same forces against the optical gauge's strain
         record["optical_gauge"] = s["optical_gauge"]
     return record
@@ -474,6 +495,8 @@ def runs_table(test: str, runs: dict, base: dict, levels: dict) -> str:
             qs = _verdict_text(r, test)
             if r.get("partial"):
                 qs = f"partial: {r['partial']}"
+            if r.get("thickness_monotone") is False:
+                qs += "; thickness not monotone"
             rows.append([label, v.key, r["beads"], r["steps"] if r["steps"] else "–",
                          "–" if r.get("wall_s") is None else f"{r['wall_s']:.0f}", qs,
                          *(_fmt(r["values"].get(q), q) for q in names)])
@@ -529,7 +552,7 @@ def convergence_table(test: str, runs: dict, base: dict) -> str:
 
 TEST_NOTES = {
     "compaction": "crimped periodic cell between rigid platens (the example's "
-                  "[compaction]: to {max_pressure} and back); thickness on the loading "
+                  "[compaction]: to {max_pressure}{back}); thickness on the loading "
                   "branch; – where the curve starts above that pressure (the platen's first "
                   "contact already presses harder)",
     "tension": "coupon tiled from the crimped cell, {tension_len} cells long (the level) × "
@@ -584,7 +607,8 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
         if test not in tests:
             continue
         note = TEST_NOTES[test].format(
-            max_pressure=store.get("max_pressure", "the example's pressure"),
+            max_pressure=store.get("max_pressure") or "its default pressure",
+            back="" if store.get("unload") is False else " and back",
             tension_len="3 / 4 / 6", tension_width=base["tension_cells"][1],
             frame_cells=base["frame_cells"])
         lines += [f"### {test}", "", f"{note}.", "", runs_table(test, runs, base, levels), "",
@@ -630,10 +654,31 @@ def findings(store: dict, base: dict, tests) -> list[str]:
     return out
 
 
+def pressure_text(value) -> str:
+    """A ``[compaction]`` pressure as the table says it ("120 kPa"; "" when not set)."""
+    if value is None or value == "":
+        return ""
+    return f"{quantity(value, 'pressure', 'compaction.max_pressure_pa') / 1e3:g} kPa"
+
+
+def scene_settings(pairs: list[str]) -> dict:
+    """``--set`` pairs as a scene-file dict: ``parse_settings``'s numbers and text, and
+    ``true`` / ``false`` as TOML booleans (e.g. ``compaction.unload=false``)."""
+    def booleans(table: dict) -> dict:
+        return {k: booleans(v) if isinstance(v, dict) else
+                {"true": True, "false": False}.get(v, v) if isinstance(v, str) else v
+                for k, v in table.items()}
+    return booleans(parse_settings(pairs))
+
+
 def data_path_for(settings_text: str) -> Path:
     """The JSON of a study: one per ``--set`` (the default contact's has no tag)."""
     tag = re.sub(r"[^A-Za-z0-9_.-]+", "_", settings_text).strip("_")
-    return HERE / (f"convergence-{tag}.json" if tag else "convergence.json")
+    name = f"convergence-{tag}.json" if tag else "convergence.json"
+    if len(name) > NAME_MAX:  # many --set: a file name the file system takes, still one per study
+        digest = hashlib.sha1(settings_text.encode()).hexdigest()[:12]
+        name = f"{name[:NAME_MAX - 18]}-{digest}.json"
+    return HERE / name
 
 
 def parse_levels(items: list[str] | None) -> dict[str, tuple]:
@@ -718,13 +763,14 @@ def main(argv: list[str] | None = None) -> int:
     settings_text = " ".join(args.set)
     if EXAMPLE != "plain_weave.toml":
         settings_text = " ".join([Path(EXAMPLE).stem, *args.set])
-    data = merged(read_example(), parse_settings(args.set))
+    data = merged(read_example(), scene_settings(args.set))
     data_path = data_path_for(settings_text)
     store = {} if args.fresh or not data_path.exists() else json.loads(data_path.read_text())
     frame_cells = args.frame_cells
     if frame_cells is None:  # a study keeps the square it started with
         frame_cells = store.get("base", {}).get("frame_cells")
     base = base_levels(data, frame_cells)
+    add_datasheet_column(data.get("compaction", {}).get("datasheet_pressure_pa"))
     levels = parse_levels(args.levels)
     tests = tuple(args.only) if args.only else TESTS
     if args.note is not None:
@@ -734,7 +780,8 @@ def main(argv: list[str] | None = None) -> int:
         if "values" not in store.setdefault("runs", {}).get(v.key, {}):
             store["runs"][v.key] = {"key": v.key, "not_run": reason}
     store.update(settings=args.set, base=base,
-                 max_pressure=str(data.get("compaction", {}).get("max_pressure_pa", "")))
+                 max_pressure=pressure_text(data.get("compaction", {}).get("max_pressure_pa")),
+                 unload=data.get("compaction", {}).get("unload", True))
     finished = True
     if args.salvage:
         if args.root is None:
@@ -766,7 +813,11 @@ def main(argv: list[str] | None = None) -> int:
             r["steps"] = steps
             test_summary = Path(r["folder"]) / stage_section(r["test"]) / "summary.json"
             if test_summary.exists():
-                r.update(verdict_of(json.loads(test_summary.read_text())))
+                ts = json.loads(test_summary.read_text())
+                r.update(verdict_of(ts))
+                if r["test"] == "compaction":  # its values come from the summary alone
+                    r["values"] = values_of("compaction", {"test_summary": ts}, {})
+                    r["thickness_monotone"] = ts.get("thickness_monotone")
     shown = TESTS if args.replot or args.write else tests
     body = section(store, base, dict(LEVELS), shown, settings_text)
     print(body)

@@ -174,3 +174,52 @@ def test_convergence_table_judges_the_two_finest_levels():
                                                             bench.LEVELS)
     assert bench._verdict_text({"quasi_static": False, "trusted": [[1.0, 3.0]]},
                                "tension") == "no; trusted 1–3 %"
+
+
+def test_convergence_compaction_options_booleans_datasheet_and_monotone():
+    """``--set compaction.unload=false`` reaches the scene as a boolean; a datasheet
+    pressure adds its thickness column; a non-monotone loading branch is said."""
+    bench = load_convergence()
+    settings = bench.scene_settings(["compaction.unload=false", "compaction.speed_fraction=2e-5",
+                                     "yarns.warp.fibre_packing=area"])
+    assert settings["compaction"] == {"unload": False, "speed_fraction": 2e-5}
+    assert settings["yarns"]["warp"]["fibre_packing"] == "area"
+    from fabmd.schema import merged
+    from fabmd.stages import protocol_stage
+
+    data = merged(bench.read_example("twintex_plain.toml"), bench.scene_settings(
+        ["compaction.unload=false", "compaction.datasheet_pressure_pa=4.14 kPa"]))
+    base = bench.base_levels(data)
+    scene = bench.build_scene(bench.variant("compaction", ("fibres", 7), base), data, base)
+    protocol = protocol_stage(scene, "compaction")
+    assert protocol.unload is False and protocol.datasheet_pressure_pa == 4140.0
+    assert bench.pressure_text("120 kPa") == "120 kPa" and bench.pressure_text(None) == ""
+
+    bench.add_datasheet_column(data["compaction"]["datasheet_pressure_pa"])
+    assert list(bench.QUANTITIES["compaction"]) == ["h1kPa", "h10kPa", "h100kPa", "h4.14kPa"]
+    summary = {"test_summary": {"datasheet_pressure_pa": 4140.0, "thickness_at_pressure_m": {
+        "1000": None, "10000": 1.2e-3, "100000": 1.1e-3, "4140": 1.25e-3}}}
+    values = bench.values_of("compaction", summary, {})
+    assert values == pytest.approx({"h1kPa": None, "h10kPa": 1.2, "h100kPa": 1.1,
+                                    "h4.14kPa": 1.25})
+    v = bench.variant("compaction", ("fibres", 7), base)
+    runs = {v.key: {"key": v.key, "values": values, "beads": 10, "steps": 5, "wall_s": 1.0,
+                    "quasi_static": True, "thickness_monotone": False}}
+    text = bench.runs_table("compaction", runs, base, {"fibres": (7,)})
+    assert "h 4.14 kPa (datasheet) [mm]" in text and "yes; thickness not monotone" in text
+    assert "| 1.25 |" in text
+
+
+def test_convergence_json_name_fits_the_file_system():
+    """Many ``--set`` made a JSON name longer than 255 bytes (OSError: File name too long);
+    a long name is cut and keeps a digest of the settings, short names are unchanged."""
+    bench = load_convergence()
+    assert bench.data_path_for("").name == "convergence.json"
+    assert bench.data_path_for("contact.friction=0.1").name == \
+        "convergence-contact.friction_0.1.json"
+    long_a = " ".join(f"compaction.key{i}=value{i}" for i in range(20))
+    long_b = long_a + " picture_frame.max_shear_angle_deg=50"
+    a, b = bench.data_path_for(long_a), bench.data_path_for(long_b)
+    assert len(a.name) <= 255 and len(b.name) <= 255 and a.name.endswith(".json")
+    assert a != b and a == bench.data_path_for(long_a)
+    assert not a.exists() or a.is_file()  # stat works on the name
