@@ -20,7 +20,9 @@ dump), the resumed run writes them afresh from the checkpoint step (the frame at
 that step again if it falls on the dump's interval) and :func:`join_dump_parts`
 puts the two together when it ends, so every frame is there once; the interrupted
 ``run`` continues with the same ``start``/``stop`` so ramps pick up exactly where
-they were.
+they were. A variable defined with an immediate value (``variable t equal $(time)``) is
+replayed with the value it got in the interrupted run (``frozen_variables``), not what
+``$(...)`` gives at the checkpoint.
 """
 
 from __future__ import annotations
@@ -44,6 +46,8 @@ STATE_COMMANDS = {
     "write_restart", "read_restart", "mass", "run", "minimize",
 }
 _FILE_KEYWORD = re.compile(r"\b(file)\s+(\S+)")
+#: ``variable NAME equal ...$(...)...``: a value fixed when the command ran
+_IMMEDIATE_VARIABLE = re.compile(r"^variable\s+(\S+)\s+equal\s+.*\$\(")
 #: dump styles whose files :func:`fabmd.engine.lammps_dump.truncate_dump` can cut back
 _CUT_DUMP_STYLES = ("custom", "atom", "local")
 #: what a dump file written before the checkpoint is called while the resumed run writes
@@ -63,6 +67,8 @@ class CheckpointState:
     monitor: dict | None = None
     #: IDs of the contact-history fixes (their pair instance numbers must match on resume)
     history_fixes: list[str] | None = None
+    #: values of the immediate variables defined before the checkpoint (name -> value)
+    frozen_variables: dict[str, float] | None = None
 
     def save(self, run_dir: Path) -> None:
         path = Path(run_dir) / STATE
@@ -113,15 +119,26 @@ def open_dumps(commands: list[str]) -> dict[str, str]:
     return dumps
 
 
+def immediate_variables(commands: list[str]) -> list[str]:
+    """Names of the equal-style variables ``commands`` define with an immediate ``$(...)``
+    value (fixed when the command ran: a replay at another time would change them)."""
+    return [m.group(1) for m in map(_IMMEDIATE_VARIABLE.match, commands) if m]
+
+
 def resume_commands(commands: list[str], state: CheckpointState) -> list[str]:
     """The commands that bring a fresh LAMMPS to the checkpoint's state and settings.
 
     The commands returned stop before the interrupted run (the caller continues it).
     """
     out = []
+    frozen = state.frozen_variables or {}
     for command in commands[: state.command_index]:
         name = command.split()[0]
-        if name == "read_data":
+        immediate = _IMMEDIATE_VARIABLE.match(command)
+        if immediate and immediate.group(1) in frozen:
+            out.append(f"variable        {immediate.group(1)} equal "
+                       f"{frozen[immediate.group(1)]!r}")
+        elif name == "read_data":
             out.append(f"read_restart    {RESTART}")
         elif name in STATE_COMMANDS or plain_run_steps(command) is not None:
             continue

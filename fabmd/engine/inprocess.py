@@ -36,6 +36,7 @@ from .checkpoint import (
     CheckpointState,
     cut_outputs,
     drop_repeated_steps,
+    immediate_variables,
     join_dump_parts,
     resume_commands,
 )
@@ -216,7 +217,8 @@ class _Run:
 
     def checkpoint(self, index: int, start: int, steps: int) -> None:
         _write_checkpoint(self.lmp, self.run_dir, self.input_name, index, start, steps,
-                          self.done, self.monitor)
+                          self.done, self.monitor,
+                          immediate_variables(self.commands[:index]))
 
 
 def _log_size(lmp, log_name: str) -> int:
@@ -266,14 +268,16 @@ def _align_history(state: CheckpointState) -> None:
 
 
 def _write_checkpoint(lmp, run_dir: Path, input_name: str, index: int, start: int,
-                      steps: int, done: int, monitor) -> None:
-    """write_restart to a temporary name, then the state file: never a half checkpoint."""
+                      steps: int, done: int, monitor, frozen: list[str] = ()) -> None:
+    """write_restart to a temporary name, then the state file: never a half checkpoint.
+    ``frozen``: immediate variables whose values the resumed input must reuse."""
     lmp.command(f"write_restart {RESTART}.tmp")
     step = int(lmp.extract_global("ntimestep"))
+    values = {name: float(lmp.extract_variable(name)) for name in frozen}
     if mpi.is_root():
         os.replace(Path(run_dir) / f"{RESTART}.tmp", Path(run_dir) / RESTART)
         state = CheckpointState(input_name, index, int(start), int(steps), step, int(done),
                                 monitor.state() if hasattr(monitor, "state") else None,
-                                history_fixes(lmp))
+                                history_fixes(lmp), values or None)
         state.save(run_dir)
     mpi.barrier()
