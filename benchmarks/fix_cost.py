@@ -37,7 +37,6 @@ difference per interval relative to the column's peak, and of the summed work.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import pickle
@@ -55,6 +54,7 @@ if "--render" not in sys.argv and "--whole" not in sys.argv:  # the fabmd on PYT
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _results import table, update_section  # noqa: E402
+from cluster_projection import fixed_steps, with_fibres  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 JSON = Path(__file__).with_name("fix_cost.json")
@@ -69,23 +69,6 @@ PIECE_CELLS = (5, 2)
 
 
 # ---- inputs ------------------------------------------------------------------------------
-def with_fibres(scene, n: int):
-    """``scene`` with ``n`` virtual fibres in every yarn family (s/d, tex unchanged)."""
-    fabric = scene.fabric
-    specs = {fam: dataclasses.replace(spec, n_fibres=n,
-                                      spacing_m=None if spec.count_per_m else spec.spacing_m)
-             for fam, spec in fabric.specs().items()}
-    return dataclasses.replace(scene, fabric=dataclasses.replace(fabric, **specs))
-
-
-def fixed_steps(text: str, steps: int) -> str:
-    """The last plain ``run N`` (the loading) cut to ``run steps``, earlier ones to ``run 0``."""
-    plain = re.compile(r"^run\s+\d+\s*$", re.M)
-    count = len(plain.findall(text))
-    seen = iter(range(count))
-    return plain.sub(lambda _m: f"run {steps if next(seen) == count - 1 else 0}", text)
-
-
 def build_models(root: Path) -> dict:
     """The models of :data:`INPUTS` (crimped cells, coupons cut from them), pickled in
     ``root`` so that an older fabmd renders its inputs for the very same beads."""

@@ -219,17 +219,24 @@ def test_calibration_refuses_a_scene_whose_crimp_derives_its_expansion(tmp_path)
     assert not (tmp_path / "out").exists()
 
 
-def test_fabmd_crimp_refuses_an_unreachable_target_before_any_folder(tmp_path):
+def _unreachable_auto_scene(tmp_path):
+    """The plain-weave example whose weft target is "auto" with a margin (50 points) above
+    its loose crimp: nothing to shrink, refused with the numbers."""
     from pathlib import Path
-
-    from fabmd.pipeline import run_crimp
-    from fabmd.scenefile import load_scene
 
     text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
     scene_file = tmp_path / "targets.toml"
     scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
                                        'target_crimp_pct = { weft = "auto" }\n'
                                        "auto_margin_pct = 50"))
+    return scene_file
+
+
+def test_fabmd_crimp_refuses_an_unreachable_target_before_any_folder(tmp_path):
+    from fabmd.pipeline import run_crimp
+    from fabmd.scenefile import load_scene
+
+    scene_file = _unreachable_auto_scene(tmp_path)
     with pytest.raises(InputError, match="nothing to shrink"):
         run_crimp(load_scene(scene_file), tmp_path / "crimp", form="cell")
     assert list(tmp_path.iterdir()) == [scene_file]
@@ -239,16 +246,10 @@ def test_fabmd_crimp_refuses_an_unreachable_target_before_any_folder(tmp_path):
 def test_fabmd_test_refuses_an_unreachable_target_before_any_folder(tmp_path, test):
     """`fabmd test` (coupon from the cell, or the cell itself) refuses the target before
     LAMMPS and writes no folder, not even ``<out>.failed``."""
-    from pathlib import Path
-
     from fabmd.pipeline import run_test
     from fabmd.scenefile import load_scene
 
-    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
-    scene_file = tmp_path / "targets.toml"
-    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
-                                       'target_crimp_pct = { weft = "auto" }\n'
-                                       "auto_margin_pct = 50"))
+    scene_file = _unreachable_auto_scene(tmp_path)
     with pytest.raises(InputError, match="nothing to shrink"):
         run_test(load_scene(scene_file), test, tmp_path / "out")
     assert list(tmp_path.iterdir()) == [scene_file]
