@@ -339,13 +339,13 @@ class DrivenTest:
         beads (:func:`fabmd.scene.drag.damping_power`; default: that of a drag γ·v on the
         absolute velocity)."""
         every = self.every(model)
+        sample_every = mean_sample_every(every)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
         if damping_power is None:
             damping_power = drag_power("free", self.gamma(model))
         return render("driven_outputs", external_power=external_power, strain_energy=strain,
                       external_ref=external_ref, damping_power=damping_power, every=every,
-                      sample_every=mean_sample_every(every),
-                      samples=every // mean_sample_every(every),
+                      sample_every=sample_every, samples=every // sample_every,
                       mean_values=mean_values, mean_names=mean_names,
                       print_values=print_values, print_names=print_names,
                       thermo_values=thermo_values,

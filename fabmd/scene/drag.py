@@ -60,13 +60,17 @@ class AffineField:
 
     def component(self, axis: str) -> str:
         """v_affine along ``axis`` ("x" or "y") written out as one LAMMPS expression."""
-        terms = [f"({e})*({k[1]}-({self.origin(k[1])}))"
-                 for k, e in self.gradient().items() if k[0] == axis]
+        terms = [f"({e})*{self.offset(k[1])}" for k, e in self.gradient().items()
+                 if k[0] == axis]
         return "+".join(terms) or "0"
 
     def origin(self, axis: str) -> str:
         """r0 along ``axis`` as LAMMPS text [m]."""
         return fmt(float(self.origin_m[_AXES.index(axis)]))
+
+    def offset(self, axis: str) -> str:
+        """(r − r0) along ``axis`` as a LAMMPS per-atom expression [m]."""
+        return f"({axis}-({self.origin(axis)}))"
 
     @property
     def vx(self) -> str:
@@ -95,8 +99,7 @@ def drag_commands(kind: str, group: str, gamma_kg_s: float,
                                            gradient=e) for k, e in grad.items())
     forces, refs = [], {}
     for axis in _AXES:
-        terms = [f"v_drag_k{k}*({k[1]}-({field.origin(k[1])}))" for k in grad
-                 if k[0] == axis]
+        terms = [f"v_drag_k{k}*{field.offset(k[1])}" for k in grad if k[0] == axis]
         if terms:
             forces.append(render_inline("affine_drag_force", axis=axis,
                                         expression="+".join(terms)))
