@@ -91,6 +91,11 @@ def test_sigterm_then_resume_equals_uninterrupted(tmp_path, monkeypatch, uninter
     assert not (out / stage / "summary.json").exists()  # the stage did not finish
     if stage != "tension":
         assert not (out / "tension").exists()
+    if stage == "tension":  # the stopped run's curve holds each step once (chunk set-ups
+        steps = [line.split()[0] for line in  # print their first step again)
+                 (out / stage / "curve.dat").read_text().splitlines()
+                 if line.strip() and not line.startswith("#")]
+        assert len(steps) > 2 and len(steps) == len(set(steps))
     if stage == "crimp":  # stopped mid-ramp: the resume continues the ramp run
         state = json.loads((out / "crimp" / "checkpoint.json").read_text())
         assert 0 < state["step"] - state["run_start"] < state["run_steps"]

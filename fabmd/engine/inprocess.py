@@ -106,10 +106,10 @@ def run_inprocess(run_dir: Path, input_name: str, *, threads: int = 1,
         try:
             first = run.restore(state) if state is not None else 0
             run.commands_from(first, state)
-            if mpi.is_root():  # a step each chunk's set-up printed again: once
-                drop_repeated_steps(run_dir, commands)
         finally:
             run.lmp.close()
+            if mpi.is_root():  # a step each chunk's set-up printed again: once, also when
+                drop_repeated_steps(run_dir, commands)  # the run stopped (interrupt, error)
             if state is not None and mpi.is_root():  # the dump frames from before the resume
                 join_dump_parts(run_dir, commands[: state.command_index])
     return run.done
