@@ -2,7 +2,10 @@
 
 The standard characterisation of a dry reinforcement (and the source for
 calibrating its transverse behaviour): the as-woven fabric — a cell periodic in x
-and y, so no edges — lies on a fixed bottom platen; the top platen comes down at
+and y, so no edges — first settles free with its centre of mass held (a platen it
+touched while still moving would kick it into the other one: Cundall damping does not
+damp a drift); then it lies on a fixed bottom platen at its lowest bead surface, and
+the top platen, from its highest, comes down at
 a constant speed until the mean pressure over an output interval reaches
 ``max_pressure_pa``, then goes back up as far as it came. Both platens are
 ``fix wall/gran/region`` planes (``granular hooke ... linear_history``, see
@@ -134,8 +137,9 @@ class Compaction:
 
     # -- geometry and time ---------------------------------------------------------------
     def platens(self, model: BeadModel) -> tuple[float, float]:
-        """(z of the bottom platen, z of the top platen at the start) [m]: each touches
-        the outermost bead surface."""
+        """(z of the lowest, z of the highest bead surface) of ``model`` [m]. The run puts
+        its platens on those of the fabric after its free settle (``platens.txt``,
+        :func:`settled_platens`)."""
         r = 0.5 * model.diameters
         z = model.positions[:, 2]
         return float((z - r).min()), float((z + r).max())
@@ -246,7 +250,8 @@ class Compaction:
                  "thickness_m": h, "phase": np.where(loading, 1, -1),
                  "bottom_pressure_pa": pb, "kinetic_energy_j": ke}
         area = self.area_m2(model)
-        lo, hi = self.platens(model)
+        model_lo, model_hi = self.platens(model)
+        lo, hi = settled_platens(run_dir, (model_lo, model_hi))
         turn_steps = int(float((run_dir / "turn.txt").read_text().split()[-1]))
         reached = turn_steps < plan.steps
         # work done on the fabric by the top platen, −∫F dz (trapezoid over the means)
@@ -279,8 +284,8 @@ class Compaction:
             "time_step_s": dt,
             "platen_speed_m_s": plan.speed_m_s,
             "starting_gap_m": hi - lo,
-            "settled_pressure_pa": float(means["pressure_pa"][~keep][-1]) if (~keep).any()
-            else 0.0,
+            # how far the free settle moved the outermost bead surfaces (bottom, top)
+            "settle_shift_m": [lo - model_lo, hi - model_hi],
             "max_pressure_pa": self.max_pressure_pa,
             "max_pressure_reached_pa": peak,
             "pressure_reached": bool(reached),
@@ -310,6 +315,17 @@ class Compaction:
                 f"max_travel_fraction or lower max_pressure_pa")
         return DrivenResult(run_dir, curve, summary, [curve_plot(p, h, loading, summary,
                                                                  bool(problems))])
+
+
+def settled_platens(run_dir: Path, model_platens: tuple[float, float]) -> tuple[float, float]:
+    """(z of the bottom platen, z of the top platen at the start) [m] of a run: where the
+    run put them, on the fabric's outermost bead surfaces after its free settle
+    (``platens.txt``); a folder written before the settle was free has none: ``model_platens``."""
+    path = Path(run_dir) / "platens.txt"
+    if not path.exists():
+        return model_platens
+    lo, hi = (float(v) for v in path.read_text().split()[-2:])
+    return lo, hi
 
 
 def quasi_static_measures(p: np.ndarray, pb: np.ndarray, ke: np.ndarray, work: np.ndarray,
