@@ -130,3 +130,21 @@ def test_kinetic_to_work_without_work_is_not_measured(tmp_path):
     assert s["max_platen_pressure_mismatch"] == 0.0
     assert s["quasi_static"]["ok"] and s["quasi_static"]["not_measured"] == [
         "max_kinetic_to_work"]
+
+
+def test_each_reported_thickness_says_whether_the_load_had_crossed_the_fabric(tmp_path):
+    # low pressures: the top platen leads the bottom one (the load still crossing the
+    # fabric); from 4 kPa on they agree
+    top = [800.0, 2000.0, 4000.0, 8000.0, 12000.0, 20000.0]
+    bottom = [500.0, 1500.0, 3900.0, 7950.0, 11950.0, 19950.0]
+    run = _synthetic_run(tmp_path / "c", top, bottom, [1e-15] * 6)
+    with pytest.warns(UserWarning, match=r"1000 Pa \(platens differ by 38%\).*speed_fraction"):
+        s = Compaction(unload=False).reduce(run, plain_weave_cell()).summary
+    at = s["quasi_static_at_pressure"]
+    assert at["1000"]["platen_pressure_mismatch"] == pytest.approx(0.375)
+    assert not at["1000"]["ok"]
+    # the mismatch falls about as the speed: the speed that would bring it to the limit
+    run_fraction = Compaction().speed_fraction * 0.1 / Compaction().speed_m_s(plain_weave_cell())
+    assert at["1000"]["speed_fraction_below"] == pytest.approx(run_fraction * 0.1 / 0.375)
+    assert at["10000"] == {"platen_pressure_mismatch": pytest.approx(50 / 8000), "ok": True}
+    assert "100000" not in at  # never reached

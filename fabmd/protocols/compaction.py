@@ -304,9 +304,14 @@ class Compaction:
                                  "began, and |bottom − top| / top pressure, on the loading "
                                  "branch from first contact (both platens carry the load) "
                                  "above 10 % of the peak; None: not measured (no such sample"
-                                 ", or the platen had done no work yet)",
+                                 ", or the platen had done no work yet); "
+                                 "quasi_static_at_pressure: the same mismatch at each "
+                                 "reported pressure",
             **overlap_summary(run_dir, self.contact),
         }
+        summary["quasi_static_at_pressure"] = mismatch_at(
+            pc, pb[loading][first:], targets, QUASI_STATIC_LIMITS["max_platen_pressure_mismatch"],
+            plan.speed_m_s / self.speed_m_s(model) * self.speed_fraction)
         problems = judge_quasi_static(summary, run_dir)
         if not reached:
             summary["pressure_note"] = (
@@ -315,6 +320,31 @@ class Compaction:
                 f"max_travel_fraction or lower max_pressure_pa")
         return DrivenResult(run_dir, curve, summary, [curve_plot(p, h, loading, summary,
                                                                  bool(problems))])
+
+
+def mismatch_at(p: np.ndarray, pb: np.ndarray, targets: tuple[float, ...], limit: float,
+                speed_fraction: float) -> dict[str, dict]:
+    """Is each reported thickness quasi-static? At each target pressure [Pa], the largest
+    |bottom − top| / top platen pressure of the two loading samples around its first
+    crossing (``p``/``pb``: top/bottom pressure on the loading branch from first contact).
+
+    The mismatch is the pressure that only moves the fabric (about ρ·c·v for a
+    through-thickness wave speed c and platen speed v), so it falls about in proportion
+    to the speed: where it is above ``limit``, ``speed_fraction_below`` is the speed
+    fraction that would bring it to the limit (``speed_fraction``: this run's). A target
+    the curve does not cross is left out."""
+    out = {}
+    for target in targets:
+        above = np.nonzero(p >= target)[0]
+        if not above.size or above[0] == 0:
+            continue
+        i = int(above[0])
+        m = float(max(abs(pb[j] - p[j]) / p[j] for j in (i - 1, i) if p[j] > 0))
+        entry = {"platen_pressure_mismatch": m, "ok": m <= limit}
+        if m > limit:
+            entry["speed_fraction_below"] = float(speed_fraction * limit / m)
+        out[f"{target:g}"] = entry
+    return out
 
 
 def settled_platens(run_dir: Path, model_platens: tuple[float, float]) -> tuple[float, float]:
@@ -357,6 +387,15 @@ def judge_quasi_static(summary: dict, run_dir: Path) -> list[str]:
     if problems:
         warnings.warn(f"compaction in {run_dir}: not quasi-static ({'; '.join(problems)}):"
                       f" lower speed_fraction", QuasiStaticWarning, stacklevel=3)
+    late = {k: v for k, v in summary.get("quasi_static_at_pressure", {}).items() if not v["ok"]}
+    if late:
+        worst = min(v["speed_fraction_below"] for v in late.values())
+        warnings.warn(
+            f"compaction in {run_dir}: the thickness at "
+            + ", ".join(f"{float(k):g} Pa (platens differ by {v['platen_pressure_mismatch']:.0%})"
+                        for k, v in late.items())
+            + f" is not quasi-static: the load had not crossed the fabric; lower "
+            f"speed_fraction to about {worst:.2g} or below", QuasiStaticWarning, stacklevel=3)
     return problems
 
 
