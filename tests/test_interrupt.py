@@ -131,6 +131,43 @@ def test_sigterm_to_the_command_exits_5_and_names_the_way_on(tmp_path, uninterru
     assert_same_result(out, uninterrupted)
 
 
+
+#: the picture frame of the tiny scene (its clamps move by fix move from their stored start)
+FRAME_SCENE = SCENE + "[picture_frame]\ncoupon = { cells = [2, 2] }\nmax_shear_angle_deg = 20\n"
+
+
+def test_picture_frame_resumes_where_it_stopped(tmp_path, monkeypatch):
+    """A picture frame stopped half way and resumed in a new process gives the uninterrupted
+    curve. Before: its clamps' start positions (fix store/state of variables) were stored
+    anew at the resumed run's first step, so the frame moved them again from where they
+    were (a 19-fibre frame: a bond 2.5x its runaway limit at the first step; here the
+    normalised force jumped by a large fraction of its peak)."""
+    import tomllib
+
+    from fabmd.scenefile import parse_scene
+
+    path = tmp_path / "frame.toml"
+    path.write_text(FRAME_SCENE)
+    whole = run_cli("test", "picture-frame", str(path), "--out", str(tmp_path / "whole"),
+                    "--quiet")
+    assert whole.returncode == 0, whole.stderr
+    scene = parse_scene(tomllib.loads(FRAME_SCENE), source=str(path))
+    monkeypatch.setattr("fabmd.engine.runner.Progress", SignalAt("picture_frame", 0.5))
+    out = tmp_path / "run"
+    with pytest.raises(RunInterrupted, match="--resume"):
+        run_test(scene, "picture-frame", out, engine=Engine(progress=True))
+    state = json.loads((out / "picture_frame" / "checkpoint.json").read_text())
+    assert 0 < state["step"] - state["run_start"] < state["run_steps"]  # stopped mid-loading
+    resumed = run_cli("test", "picture-frame", str(path), "--out", str(out), "--resume",
+                      "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    a = read_csv(tmp_path / "whole" / "picture_frame" / "curve.csv")
+    b = read_csv(out / "picture_frame" / "curve.csv")
+    np.testing.assert_allclose(b["shear_angle_deg"], a["shear_angle_deg"], rtol=0, atol=1e-9)
+    peak = np.abs(a["normalised_force_n_m"]).max()
+    assert peak > 0
+    assert np.abs(b["normalised_force_n_m"] - a["normalised_force_n_m"]).max() <= 1e-6 * peak
+
 DRIVER = """
 import os, signal, sys
 import fabmd.engine.runner as runner
