@@ -654,6 +654,28 @@ def findings(store: dict, base: dict, tests) -> list[str]:
     return out
 
 
+def interval_table(runs: dict, test: str = "picture-frame") -> str:
+    """Per-interval quasi-static verdict of every finished ``test`` run whose folder is
+    kept: one row per interval (e.g. 5° of shear) with the drag (damping) share, inertia
+    share and KE/U of that interval, and whether it passes."""
+    rows = []
+    for key, r in sorted(runs.items(), key=lambda kv: (kv[1].get("cells") or 0, kv[0])):
+        if r.get("test") != test or "values" not in r or not r.get("folder"):
+            continue
+        path = Path(r["folder"]) / stage_section(test) / "summary.json"
+        if not path.exists():
+            continue
+        ts = json.loads(path.read_text())
+        ts = ts.get("test_summary", ts)
+        for i in (ts.get("quasi_static_intervals") or {}).get("intervals", []):
+            def share(name, i=i):
+                return "–" if i.get(name) is None else f"{i[name]:.3f}"
+            rows.append([key, f"{i['from']:g}–{i['to']:g}", share("damping_share"),
+                         share("inertia_share"), share("kinetic_to_strain_energy"),
+                         "yes" if i.get("ok") else "no"])
+    return table(["run", "interval", "drag share", "inertia share", "KE/U", "ok"], rows)
+
+
 def pressure_text(value) -> str:
     """A ``[compaction]`` pressure as the table says it ("120 kPa"; "" when not set)."""
     if value is None or value == "":
@@ -752,6 +774,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--estimate", action="store_true",
                         help="no runs: beads, steps and time of each planned run")
     parser.add_argument("--replot", action="store_true", help="no runs: table from the JSON")
+    parser.add_argument("--intervals", action="store_true",
+                        help="no runs: print the per-interval quasi-static table of the "
+                             "picture frames whose folders are kept")
     parser.add_argument("--fresh", action="store_true", help="forget the JSON's runs")
     parser.add_argument("--root", type=Path, default=None, help="folder for the runs")
     parser.add_argument("--scene", default=EXAMPLE,
@@ -801,6 +826,9 @@ def main(argv: list[str] | None = None) -> int:
         _save(store, data_path)
     if args.estimate:
         estimate(planned(tests, levels, base), data, base, store)
+        return 0
+    if args.intervals:
+        print(interval_table(store.get("runs", {})))
         return 0
     if not args.replot:
         root = args.root or Path(tempfile.mkdtemp(prefix="fabmd-convergence-"))
