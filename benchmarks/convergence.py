@@ -588,8 +588,9 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
         f"`examples/{EXAMPLE}` refined one parameter at a time from its defaults "
         f"({base['n_fibres']} fibres per yarn, s/d {base['spacing_ratio']:g}, tension "
         f"coupon {base['tension_cells'][0]} × {base['tension_cells'][1]} cells, picture "
-        f"frame {base['frame_cells']} × {base['frame_cells']} cells{frame_note}; 1 cell = "
-        f"5 mm; \"(base)\" marks these in the tables), "
+        f"frame {base['frame_cells']} × {base['frame_cells']} cells{frame_note}; "
+        f"{'1 cell = 5 mm; ' if EXAMPLE == 'plain_weave.toml' else ''}"
+        f"\"(base)\" marks these in the tables), "
         f"{contact}. One process, in-process LAMMPS on one core, one run after the other "
         f"under `nice`, on the 2-core machine shared with three other developers' jobs: "
         f"wall times are noisy. Runs in the table: {len(done)}, "
@@ -652,6 +653,28 @@ def findings(store: dict, base: dict, tests) -> list[str]:
                        f"quantities within the criterion; largest change "
                        f"{QUANTITIES[test][worst][0]} {shown}")
     return out
+
+
+def interval_table(runs: dict, test: str = "picture-frame") -> str:
+    """Per-interval quasi-static verdict of every finished ``test`` run whose folder is
+    kept: one row per interval (e.g. 5° of shear) with the drag (damping) share, inertia
+    share and KE/U of that interval, and whether it passes."""
+    rows = []
+    for key, r in sorted(runs.items(), key=lambda kv: (kv[1].get("cells") or 0, kv[0])):
+        if r.get("test") != test or "values" not in r or not r.get("folder"):
+            continue
+        path = Path(r["folder"]) / stage_section(test) / "summary.json"
+        if not path.exists():
+            continue
+        ts = json.loads(path.read_text())
+        ts = ts.get("test_summary", ts)
+        for i in (ts.get("quasi_static_intervals") or {}).get("intervals", []):
+            def share(name, i=i):
+                return "–" if i.get(name) is None else f"{i[name]:.3f}"
+            rows.append([key, f"{i['from']:g}–{i['to']:g}", share("damping_share"),
+                         share("inertia_share"), share("kinetic_to_strain_energy"),
+                         "yes" if i.get("ok") else "no"])
+    return table(["run", "interval", "drag share", "inertia share", "KE/U", "ok"], rows)
 
 
 def pressure_text(value) -> str:
@@ -752,6 +775,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--estimate", action="store_true",
                         help="no runs: beads, steps and time of each planned run")
     parser.add_argument("--replot", action="store_true", help="no runs: table from the JSON")
+    parser.add_argument("--intervals", action="store_true",
+                        help="no runs: print the per-interval quasi-static table of the "
+                             "picture frames whose folders are kept")
     parser.add_argument("--fresh", action="store_true", help="forget the JSON's runs")
     parser.add_argument("--root", type=Path, default=None, help="folder for the runs")
     parser.add_argument("--scene", default=EXAMPLE,
@@ -801,6 +827,9 @@ def main(argv: list[str] | None = None) -> int:
         _save(store, data_path)
     if args.estimate:
         estimate(planned(tests, levels, base), data, base, store)
+        return 0
+    if args.intervals:
+        print(interval_table(store.get("runs", {})))
         return 0
     if not args.replot:
         root = args.root or Path(tempfile.mkdtemp(prefix="fabmd-convergence-"))

@@ -316,8 +316,10 @@ def _law_and_fibre(where: str, table: dict, fabric: Fabric, disc: Discretisation
 
 def _within_family_law(where: str, table, fabric: Fabric, disc: Discretisation):
     """The :class:`~fabmd.model.bundle_contact.BundleContact` of ``[contact] within_family =
-    { law = ..., form = "law" }`` (same-family pairs follow the law itself)."""
+    { law = ..., form = "law" }`` (same-family pairs follow the law itself): that of its
+    ``family``, and (family, BundleContact) of every family (the law on its own fibre)."""
     from .model.bundle_contact import BundleContact
+    from .model.fabric_model import family_beads
 
     section = "contact.within_family"
     if "reference_pressure_pa" in table:
@@ -326,10 +328,13 @@ def _within_family_law(where: str, table, fabric: Fabric, disc: Discretisation):
                          f"pressure), got {table['reference_pressure_pa']!r}")
     _check_keys(table, COMPACTION_KEYS, where, section)
     law, fibre, _ = _law_and_fibre(where, table, fabric, disc, section)
-    try:
-        return BundleContact(law, fibre.area_m2, fibre.diameter_m)
-    except InputError as exc:
-        raise InputError(f"{where}: [{section}] {exc}") from None
+    own = {}
+    for name, fam in family_beads(fabric, disc).items():
+        try:
+            own[name] = BundleContact(law, fam.fibre.area_m2, fam.fibre.diameter_m)
+        except InputError as exc:
+            raise InputError(f"{where}: [{section}] {name}: {exc}") from None
+    return BundleContact(law, fibre.area_m2, fibre.diameter_m), tuple(own.items())
 
 
 def parse_scene(data: dict, source: str = "scene") -> Scene:
@@ -472,8 +477,8 @@ def _contact(table: dict, fabric: Fabric, disc: Discretisation, where: str) -> C
             raise InputError(f"{where}: [contact.within_family] form must be one of "
                              f"{', '.join(WITHIN_FAMILY_FORMS)}, got {form!r}")
         if form == "law":
-            contact_table["within_family_law"] = _within_family_law(where, within_table,
-                                                                    fabric, disc)
+            contact_table["within_family_law"], contact_table["within_family_laws"] = \
+                _within_family_law(where, within_table, fabric, disc)
         else:
             contact_table["within_family_stiffness_pa"] = _stiffness_from_law(
                 where, within_table, fabric, disc, contact_table, "contact.within_family")

@@ -1,5 +1,5 @@
 """The Twintex balanced 2/2 twill of Cao et al. (2008), Table 1
-(benchmarks/scenes/twintex_twill.toml; not an example: it does not crimp yet): a dense
+(benchmarks/scenes/twintex_twill.toml; not an example: it does not crimp with the law): a dense
 fabric (width/spacing 0.90 warp, 0.87 weft) and what its loose state needs."""
 
 from __future__ import annotations
@@ -89,9 +89,15 @@ def test_a_fibre_whose_beads_coincide_is_a_fold_not_a_nan():
 
 
 def test_the_two_families_fibres_differ_in_diameter():
-    """Why the shipped scene stops at the crimp: the within-family law takes one bead
-    diameter, and the inscribed fibres of the two sections are 0.497 / 0.413 mm."""
+    """The inscribed fibres of the two sections are 0.497 / 0.413 mm: the law takes one
+    table per family, but the weft's fibres hold more filament area than a hexagonal
+    bundle of their diameter packs (touching Vf 1.225 > 0.907), so the scene with the law
+    is refused when read (why the shipped scene keeps the default contact)."""
     fabric = load_scene(SCENE).fabric
     d = {fam: spec.packing()[1] for fam, spec in fabric.specs().items()}
     assert d["warp"] == pytest.approx(0.497e-3, rel=2e-3)
     assert d["weft"] == pytest.approx(0.413e-3, rel=2e-3)
+    text = _scene_text(**{"# within_family = {": "within_family = {"})
+    with pytest.raises(InputError, match=r"\[contact.within_family\] weft: .*touch at Vf "
+                                         r"1.225, at or above the packing limit 0.907"):
+        _fabric(text)

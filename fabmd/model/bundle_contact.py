@@ -50,6 +50,12 @@ same-family type pairs adds the excess F − k_n,lin·(d − r) (:meth:`BundleCo
 a file in the run folder). k_n,lin is the steepest line under F down to the core
 (:meth:`BundleContact.linear_pair_stiffness_n_per_m`), so the total is F at every overlap.
 Known limit: friction within a family is μ × the granular (linear) part only.
+
+Families of different fibre diameters (:func:`law_sections`): each family's virtual fibre
+has its own A and d, so each gets its own :class:`BundleContact` of the same law — its own
+shift p(Vf_touch), core, linear part and table section at its own bead spacing; the law
+per unit length is the stated one for every family. Pairs of different families are
+crossings (the crossing contact), so no mixed-diameter section is needed.
 """
 
 from __future__ import annotations
@@ -313,3 +319,90 @@ def _unit_pair_force(bundle: BundleContact, crossing_stiffness_pa: float):
         known = np.dot(w_lo[1:], f[i + 1:-1]) + np.dot(w_hi, f[i + 1:])
         f[i] = (target[i] - known) / w_lo[0]
     return r, f
+
+
+@dataclass(frozen=True)
+class LawSection:
+    """One section of the within-family table: a family's bundle at its bead spacing.
+
+    Attributes:
+        keyword: the section's keyword in the table file (``pair_coeff ... table``).
+        bundle: the family's :class:`BundleContact` (its own A and d, the stated law).
+        bond_length_m: the bead spacing l0 [m] its pair force is scaled to (F = l0²·f).
+    """
+
+    keyword: str
+    bundle: BundleContact
+    bond_length_m: float
+
+    def table_text(self, crossing_stiffness_pa: float) -> str:
+        """The section's text (:meth:`BundleContact.table_text`)."""
+        return self.bundle.table_text(self.bond_length_m, crossing_stiffness_pa,
+                                      self.keyword, TABLE_POINTS)
+
+    def linear_pair_stiffness_n_per_m(self, crossing_stiffness_pa: float) -> float:
+        """k_n of its granular (linear) part [N/m] at its bead spacing."""
+        return self.bundle.linear_pair_stiffness_n_per_m(self.bond_length_m,
+                                                         crossing_stiffness_pa)
+
+    def max_pair_stiffness_n_per_m(self, crossing_stiffness_pa: float) -> float:
+        """Its steepest pair tangent [N/m] at its bead spacing (the time step)."""
+        return self.bundle.max_pair_stiffness_n_per_m(self.bond_length_m,
+                                                      crossing_stiffness_pa)
+
+
+def check_family_laws(reference: BundleContact | None, family_laws,
+                      stiffness_pa: float | None = None, normal: str = "hooke",
+                      per_length: bool = True) -> tuple:
+    """Check a contact's within-family law ``reference`` (with the contact's
+    ``within_family_stiffness_pa``, ``normal`` and whether its stiffness is per length) and
+    return ``family_laws`` as a tuple of (family, :class:`BundleContact`), each of
+    ``reference``'s law on that family's own fibre; raises InputError."""
+    if reference is not None:
+        if not isinstance(reference, BundleContact):
+            raise InputError("contact.within_family_law must be a BundleContact, got "
+                             f"{reference!r}")
+        if stiffness_pa is not None:
+            raise InputError("contact.within_family_law: give it or "
+                             "within_family_stiffness_pa, not both (the law sets the "
+                             f"linear part), got {stiffness_pa!r}")
+        if normal != "hooke" or not per_length:
+            raise InputError(
+                "contact.within_family_law: needs normal = 'hooke' and the stiffness per "
+                "unit length (no stiffness_factor / stiffness_n_per_m), got normal = "
+                f"{normal!r}")
+    pairs = tuple(tuple(item) for item in family_laws)
+    if pairs and reference is None:
+        raise InputError("contact.within_family_laws: needs within_family_law (the law), "
+                         f"got families {[name for name, *_ in pairs]}")
+    for item in pairs:
+        if len(item) != 2 or not isinstance(item[1], BundleContact) \
+                or item[1].law != reference.law:
+            raise InputError("contact.within_family_laws: each entry must be (family, "
+                             f"BundleContact of the law {reference.law.name!r}), got {item!r}")
+    return pairs
+
+
+def law_sections(reference: BundleContact, family_laws, beads, keyword: str
+                 ) -> list[LawSection]:
+    """The within-family table's sections for bead kinds ``beads`` (each with
+    ``diameter_m`` and ``bond_length_m``).
+
+    One bundle for all families (one fibre kind, or ``family_laws`` empty): one section
+    ``keyword`` at the widest spacing of all beads. Several: one section per distinct
+    family bundle, ``<keyword>_<FAMILY>`` (the first family that has it), at the widest
+    spacing of the beads of its diameter; a bundle no bead has is left out.
+    """
+    distinct: list[tuple[str, BundleContact]] = []
+    for name, bundle in family_laws:
+        if all(bundle != other for _, other in distinct):
+            distinct.append((name, bundle))
+    if len(distinct) <= 1:
+        return [LawSection(keyword, reference, max(b.bond_length_m for b in beads))]
+    out = []
+    for name, bundle in distinct:
+        d = bundle.diameter_m
+        spacings = [b.bond_length_m for b in beads if abs(b.diameter_m - d) <= 1e-9 * d]
+        if spacings:
+            out.append(LawSection(f"{keyword}_{name.upper()}", bundle, max(spacings)))
+    return out

@@ -46,21 +46,13 @@ compaction that sets yarn narrowing and shear locking) touch with
 ``pair_style granular`` with one ``pair_coeff i j`` per type pair (the classic
 ``gran/*`` styles take one global set of coefficients), about 2.5× the loop time
 (section "Pair styles"); Hooke only. The time step follows the stiffer of the two.
-Measured (``benchmarks/RESULTS.md``, "Split contact"): with the glass law's k' (secant at
-100 kPa) a yarn of 7 virtual fibres cannot carry a crossing's concentrated load through
-its thickness — crimping the plain-weave example towards 1 cN/tex pushes fibres of one
-yarn through each other (overlap > 0.5 d at −6 %); a linear contact has no packing limit.
+Measured (RESULTS "Split contact"): with the glass law's secant k' at 100 kPa, crimping the
+plain weave towards 1 cN/tex pushes fibres of one yarn through each other (overlap > 0.5 d
+at −6 %): a linear contact has no packing limit.
 
-Within-family law (``within_family_law``, a
-:class:`fabmd.model.bundle_contact.BundleContact`): same-family pairs follow the compaction
-law itself up to its packing limit (per unit length, averaged over the chains' register, so
-independent of the bead spacing), then a hard core as stiff as a crossing — ``pair_style
-hybrid/overlay granular table``: ``granular`` carries the largest linear part under it
-(friction and damping act there; friction within a family is μ × that part only, a known
-limit), a ``table`` on same-family type pairs the excess (a file in the run folder,
-:meth:`ContactModel.table_files`). The energy balance is not measured with it (``compute
-pair/local`` under ``hybrid/overlay`` loses the tangential force of overlaid pairs:
-:mod:`fabmd.scene.energy`).
+Within-family law (``within_family_law``): same-family pairs follow the compaction law
+itself, one table section per family diameter (:mod:`fabmd.model.bundle_contact`); the
+energy balance is not measured with it (:mod:`fabmd.scene.energy`).
 
 Crossing per crossing (``crossing = "per_crossing"``, opt-in; default ``"per_length"``).
 A crossing is a point contact, so a k_n ∝ l0 makes its force follow the bead spacing
@@ -116,7 +108,7 @@ from .. import inputs
 from ..errors import InputError
 from ..units import quantity
 from .beads import BeadParameters
-from .bundle_contact import TABLE_POINTS, BundleContact
+from .bundle_contact import BundleContact, LawSection, check_family_laws, law_sections
 
 NORMAL_MODELS = ("hooke", "hertz")
 #: ``ContactModel.crossing``: k_n of pairs of different families ∝ l0 (per unit length of
@@ -236,6 +228,8 @@ class ContactModel:
             the same family follow the compaction law itself (nonlinear, hard core past the
             packing limit; module docstring, "Within-family law"); None (default): not.
             Excludes ``within_family_stiffness_pa`` (the law sets the linear part).
+        within_family_laws: (family, BundleContact) of every family: that law on each
+            family's own fibre (A, d; one table section per diameter); (): the one for all.
         crossing: k_n of pairs of different families: ``"per_length"`` (default, k'·l0)
             or ``"per_crossing"`` (2k'·l0²/d: a crossing of two fibres carries
             2π·k'·δ²·(1 − δ/d)/sin θ whatever the bead spacing, averaged over register;
@@ -255,6 +249,7 @@ class ContactModel:
     overlap_limit: float = 0.5
     within_family_stiffness_pa: float | None = None
     within_family_law: BundleContact | None = None
+    within_family_laws: tuple = ()
     crossing: str = "per_length"
 
     def __post_init__(self):
@@ -265,19 +260,9 @@ class ContactModel:
                 "contact.crossing = 'per_crossing' needs per-type-pair coefficients (give "
                 "within_family_stiffness_pa or within_family: same-family pairs stay per "
                 "unit length), got neither")
-        if self.within_family_law is not None:
-            if not isinstance(self.within_family_law, BundleContact):
-                raise InputError("contact.within_family_law must be a BundleContact, got "
-                                 f"{self.within_family_law!r}")
-            if self.within_family_stiffness_pa is not None:
-                raise InputError("contact.within_family_law: give it or "
-                                 "within_family_stiffness_pa, not both (the law sets the "
-                                 f"linear part), got {self.within_family_stiffness_pa!r}")
-            if self.normal != "hooke" or not self.per_length:
-                raise InputError(
-                    "contact.within_family_law: needs normal = 'hooke' and the stiffness per "
-                    "unit length (no stiffness_factor / stiffness_n_per_m), got normal = "
-                    f"{self.normal!r}")
+        object.__setattr__(self, "within_family_laws", check_family_laws(
+            self.within_family_law, self.within_family_laws, self.within_family_stiffness_pa,
+            self.normal, self.per_length))
         if self.within_family_stiffness_pa is not None:
             object.__setattr__(self, "within_family_stiffness_pa", inputs.positive(
                 "contact.within_family_stiffness_pa",
@@ -330,9 +315,8 @@ class ContactModel:
         kn = self.normal_stiffness_n_per_m(beads)
         if self.split:
             kn = max(kn, self.within_family_stiffness_n_per_m(beads))
-        if self.within_family_law is not None:  # its table's steepest part
-            kn = max(kn, self.within_family_law.max_pair_stiffness_n_per_m(
-                max(b.bond_length_m for b in beads), self.crossing_stiffness_pa(beads)))
+        for sec in self.law_sections(beads):  # its tables' steepest part
+            kn = max(kn, sec.max_pair_stiffness_n_per_m(self.crossing_stiffness_pa(beads)))
         if self.normal == "hertz":
             kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
                                   / self.reference_overlap)
@@ -362,10 +346,19 @@ class ContactModel:
         the contact is not split."""
         if not self.split:
             return self.normal_stiffness_n_per_m(beads)
-        if self.within_family_law is not None:
-            return self.within_family_law.linear_pair_stiffness_n_per_m(
-                max(b.bond_length_m for b in beads), self.crossing_stiffness_pa(beads))
+        if self.within_family_law is not None:  # several diameters: the softest
+            k_cross = self.crossing_stiffness_pa(beads)
+            return min(s.linear_pair_stiffness_n_per_m(k_cross) for s in self.law_sections(beads))
         return _normal_stiffness("contact", self.within_family_stiffness_pa, None, None, beads)
+
+    def law_sections(self, beads: list[BeadParameters]) -> list[LawSection]:
+        """The within-family law's table sections (none without the law)."""
+        return law_sections(self.within_family_law, self.within_family_laws, beads,
+                            WITHIN_FAMILY_KEYWORD) if self.within_family_law else []
+
+    def family_law(self, family: str) -> BundleContact | None:
+        """The within-family law's bundle of ``family`` (its own fibre where given)."""
+        return dict(self.within_family_laws).get(family, self.within_family_law)
 
     def crossing_stiffness_pa(self, beads: list[BeadParameters]) -> float:
         """k' of a crossing [Pa] (per unit length; needs the per-length form)."""
@@ -374,27 +367,31 @@ class ContactModel:
 
     def table_files(self, beads: list[BeadParameters]) -> dict[str, str]:
         """Files the LAMMPS input reads, by name: the within-family law's table
-        (:data:`WITHIN_FAMILY_TABLE`), else none. The excess per bead pair uses the same
-        bead spacing l0 as the linear part (the widest)."""
-        if self.within_family_law is None:
-            return {}
-        l0 = max(b.bond_length_m for b in beads)
-        return {WITHIN_FAMILY_TABLE: self.within_family_law.table_text(
-            l0, self.crossing_stiffness_pa(beads), WITHIN_FAMILY_KEYWORD, TABLE_POINTS)}
+        (:data:`WITHIN_FAMILY_TABLE`, one section per :meth:`law_sections`), else none.
+        Each section's excess uses the same bead spacing l0 as its linear part."""
+        k_cross = self.crossing_stiffness_pa(beads) if self.within_family_law else None
+        return {WITHIN_FAMILY_TABLE: "\n".join(sec.table_text(k_cross) for sec in
+                                                self.law_sections(beads))} if k_cross else {}
 
     def softest_normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """The smallest k_n of any type pair [N/m] (largest overlap per unit force)."""
         return min(self.normal_stiffness_n_per_m(beads),
                    self.within_family_stiffness_n_per_m(beads))
 
-    def type_pair_coefficients(self, beads: list[BeadParameters], n_types: int
+    def type_pair_coefficients(self, beads: list[BeadParameters], n_types: int,
+                               families: tuple[str, ...] = ()
                                ) -> list[tuple[int, int, dict[str, float]]]:
         """``(i, j, coefficients)`` for every atom type pair i <= j of a split contact:
-        i == j (one family) with the within-family stiffness, else the crossing one.
-        Damping is a fraction of critical for each pair's own k_n (lightest bead)."""
+        i == j with the within-family stiffness (the law's linear part of ``families[i -
+        1]``), else the crossing one; damping a fraction of critical for each pair's k_n."""
         cross = self.pair_coefficients(beads)
         within = self._coefficients(self.within_family_stiffness_n_per_m(beads), beads)
-        return [(i, j, within if i == j else cross)
+        sections = {s.bundle: s for s in self.law_sections(beads)}
+        own = {i: self._coefficients(sections[law].linear_pair_stiffness_n_per_m(
+                   self.crossing_stiffness_pa(beads)), beads)
+               for i, law in enumerate(map(self.family_law, families), start=1)
+               if len(sections) > 1 and law in sections}
+        return [(i, j, own.get(i, within) if i == j else cross)
                 for i in range(1, n_types + 1) for j in range(i, n_types + 1)]
 
     def pair_style(self) -> str:

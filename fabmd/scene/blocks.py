@@ -11,7 +11,6 @@ from ..model.bead_model import BeadModel
 from ..model.beads import BeadParameters
 from ..model.bundle_contact import TABLE_POINTS
 from ..model.contact import (
-    WITHIN_FAMILY_KEYWORD,
     WITHIN_FAMILY_TABLE,
     ContactModel,
     ToolContact,
@@ -190,29 +189,36 @@ def contact(model: BeadModel, contact_model: ContactModel | None,
                                friction=fmt(c["friction"]),
                                sub_style="" if law is None else "granular ")
                  for i, j, c in contact_model.type_pair_coefficients(
-                     beads, len(model.family_names))]
+                     beads, len(model.family_names), model.family_names)]
         if law is None:
             return render("contact_granular_split", friction=contact_model.friction,
                           pair_coeffs="\n".join(lines))
-        return _contact_law(model, contact_model, lines)
+        return _contact_law(model, contact_model, beads, lines)
     c = contact_model.pair_coefficients(beads)
     return render("contact_granular", normal=contact_model.normal,
                   style=contact_model.pair_style(), **c)
 
 
-def _contact_law(model: BeadModel, contact_model: ContactModel, pair_coeffs: list[str]) -> str:
-    """``hybrid/overlay granular table``: the within-family law (ContactModel docstring);
-    the table file comes from :meth:`ContactModel.table_files` (:func:`contact_files`)."""
+def _contact_law(model: BeadModel, contact_model: ContactModel, beads: list[BeadParameters],
+                 pair_coeffs: list[str]) -> str:
+    """``hybrid/overlay granular table``: the within-family law (ContactModel docstring),
+    each family on its own table section (its fibre's diameter); the table file comes from
+    :meth:`ContactModel.table_files` (:func:`contact_files`)."""
     law = contact_model.within_family_law
-    d = float(model.diameters.max())
-    if np.ptp(model.diameters) > 1e-9 * d or abs(d - law.diameter_m) > 1e-9 * d:
-        raise InputError(
-            f"contact.within_family_law: needs one bead diameter, the law's "
-            f"{law.diameter_m:.6g} m, got {float(model.diameters.min()):.6g}–{d:.6g} m")
-    tables = [render_inline("pair_coeff_table_law", i=i, table_file=WITHIN_FAMILY_TABLE,
-                            keyword=WITHIN_FAMILY_KEYWORD,
-                            cutoff=law.cutoff_text)
-              for i in range(1, len(model.family_names) + 1)]
+    listed = contact_model.law_sections(beads)
+    sections = {s.bundle: s for s in listed}
+    tables = []
+    for i, family in enumerate(model.family_names, start=1):
+        own = contact_model.family_law(family)
+        d = model.diameters[model.atom_types == i]
+        if not d.size:  # a family without beads here: any section will do
+            own = listed[0].bundle
+        elif own not in sections or np.max(np.abs(d / own.diameter_m - 1.0)) > 1e-9:
+            raise InputError(f"contact.within_family_law: the {family} fibres need the "
+                             f"law's bead diameter {own.diameter_m:.6g} m (their fibre's), "
+                             f"got {d.min():.6g}–{d.max():.6g} m")
+        tables.append(render_inline("pair_coeff_table_law", i=i, table_file=WITHIN_FAMILY_TABLE,
+                                    keyword=sections[own].keyword, cutoff=own.cutoff_text))
     return render("contact_granular_law", law=law.law.name, friction=contact_model.friction,
                   table_file=WITHIN_FAMILY_TABLE, points=TABLE_POINTS,
                   pair_coeffs="\n".join(pair_coeffs), table_coeffs="\n".join(tables))
@@ -286,6 +292,20 @@ def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
     return _tool_contact(tool, beads, fix_id, group, "wall/gran", where, contacts)
 
 
+def _overlap_families(model: BeadModel, contact_model: ContactModel,
+                      beads: list[BeadParameters], d_min: float) -> str:
+    """Overlap lines of the within-family law with several bead diameters: each family's
+    own pairs by distance, crossings by force (templates overlap_pair_family[ies])."""
+    lines, overlap = [], "v_fabmd_overlap_cross"
+    for i in range(1, len(model.family_names) + 1):
+        d = model.diameters[model.atom_types == i]
+        if d.size:
+            lines.append(render("overlap_pair_family", i=i, diameter=float(d.max())))
+            overlap = f"ternary(v_fabmd_overlap_{i}>{overlap},v_fabmd_overlap_{i},{overlap})"
+    return render("overlap_pair_families", family_lines="\n".join(lines), overlap=overlap,
+                  kn=fmt(contact_model.normal_stiffness_n_per_m(beads)), diameter=d_min)
+
+
 def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
                     beads: list[BeadParameters], every: int = 100,
                     tool_fixes: tuple[str, ...] = (), file: str = OVERLAP_FILE) -> str:
@@ -308,6 +328,8 @@ def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
         d_min = float(model.diameters.min())
         if np.ptp(model.diameters) <= 1e-9 * d_min:
             pair_lines = render("overlap_pair_distance", diameter=d_min)
+        elif contact_model.within_family_law is not None:
+            pair_lines = _overlap_families(model, contact_model, beads, d_min)
         else:
             c = contact_model.pair_coefficients(beads)
             if contact_model.normal == "hooke":  # split contact: the softer pair bounds it
