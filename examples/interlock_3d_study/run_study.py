@@ -1,0 +1,405 @@
+"""The 3D study at its scale: the method paper's through-thickness angle interlock, from
+the as-woven periodic cell to the 120 × 50 mm tension coupon and a picture frame.
+
+Stages (each a fabmd run folder under ``--out``; every one runs again with plain
+``mpirun -np N lmp -in in.<protocol>`` from its folder, see ``run.sh``):
+
+* ``cell``    the periodic unit cell crimped as woven (thickness, crimp per family, yarn
+              tension, cost);
+* ``piece``   6 × 6 cells of the crimped cell, tiled, cut free and relaxed (thickness and
+              crimp of its interior and of the whole piece against the cell);
+* ``loose``   (not in the default list) the 6 × 6-cell piece crimped from loose as a
+              finite piece (the issue's wording; about 4× the beads of the tension coupon);
+* ``tension`` the 120 × 50 mm warp-direction coupon to 3 % (fabmd's pipeline: coupon cut
+              from the crimped cell, its crimp tension relieved, relaxed, pulled);
+* ``frame``   a 40 × 40 mm picture frame to 60° on the same crimped cell; the midplane of
+              the sheared fabric against its thickness (wrinkling);
+* ``mpirun``  (``--quick`` only by default) the quick tension coupon again as a run folder run
+              by ``mpirun -np 2 lmp -in`` (the standalone back end): its curve against the
+              in-process one.
+
+``--quick`` runs the same stages on a tiny setting (2 × 2-cell piece, 48 × 20 mm coupon,
+20 mm frame to 30°, loading 10 × faster) in a few minutes; the test uses it. The results
+go to ``<out>/study.json`` (the table of the README) and ``<out>/*.png``.
+
+    python examples/interlock_3d_study/run_study.py --out runs/study3d [--np 1]
+    python examples/interlock_3d_study/run_study.py --out /tmp/q --quick
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import dataclasses
+import json
+import re
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+SCENE = HERE / "interlock_3d_study.toml"
+STAGES = ("cell", "piece", "tension", "frame")
+ALL_STAGES = (*STAGES, "loose", "mpirun")
+
+#: the tiny setting of ``--quick`` (scene tables replaced; the fabric is the same)
+QUICK = {
+    "piece_cells": 2,
+    "tension": {"max_elongation_pct": 3.0, "speed_fraction": 1e-3,
+                "coupon": {"length_m": "48 mm", "width_m": "20 mm"}},
+    "picture_frame": {"max_shear_angle_deg": 30, "speed_fraction": 1e-2,
+                      "coupon": {"length_m": "20 mm", "width_m": "20 mm"}},
+}
+PIECE_CELLS = 6
+#: the interior of a piece: beads at least this far inside its edges [m]
+PIECE_EDGE_M = 0.024
+#: elongation ranges [%] of the tangent stiffness before and after the warp straightens
+SOFT_RANGE_PCT, STIFF_RANGE_PCT = (0.2, 1.0), (1.5, 3.0)
+#: in-plane bin of the midplane measure [m] (about a cell's weft columns)
+MIDPLANE_BIN_M = 0.004
+
+_LOOP = re.compile(r"^Loop time of (\S+) on (\d+) procs for (\d+) steps", re.M)
+
+
+# ---- the scene ---------------------------------------------------------------------------
+def study_scene(quick: bool = False, scene_path: Path = SCENE):
+    """The study's scene (``--quick``: the tiny setting's tension and frame tables)."""
+    from fabmd.scenefile import load_scene
+
+    scene = load_scene(scene_path)
+    if not quick:
+        return scene
+    protocols = copy.deepcopy(scene.protocols)
+    for table in ("tension", "picture_frame"):
+        protocols[table] = {**protocols.get(table, {}), **QUICK[table]}
+    return dataclasses.replace(scene, protocols=protocols)
+
+
+def engine_for(ranks: int):
+    """One rank: in-process LAMMPS; more: the run folder under ``mpirun -np ranks lmp``."""
+    from fabmd.engine import Engine
+
+    if ranks > 1:
+        return Engine(backend="standalone", ranks=ranks, progress=False)
+    return Engine(progress=False, ranks=1)
+
+
+def lammps_cost(folder: Path) -> dict:
+    """Steps, ranks and LAMMPS loop time summed over every ``log.lammps`` under ``folder``."""
+    steps = loop = 0.0
+    ranks = set()
+    for log in sorted(Path(folder).rglob("log.lammps")):
+        for m in _LOOP.finditer(log.read_text(errors="replace")):
+            loop += float(m.group(1))
+            ranks.add(int(m.group(2)))
+            steps += int(m.group(3))
+    return {"steps": int(steps), "loop_s": loop, "ranks": sorted(ranks)}
+
+
+def _families(values: dict, key: str | None = None) -> dict:
+    return {f: (v[key] if key else v) for f, v in values.items()}
+
+
+# ---- stages -------------------------------------------------------------------------------
+def stage_cell(scene, out: Path, engine) -> dict:
+    """(a) The periodic cell crimped as woven."""
+    from fabmd.pipeline import run_crimp
+
+    t0 = time.perf_counter()
+    result = run_crimp(scene, out / "cell", engine=engine, overwrite=True, form="cell")
+    wall = time.perf_counter() - t0
+    s = result.summary
+    return {"folder": str(out / "cell"), "beads": s["crimped"]["n_beads"], "wall_s": wall,
+            **lammps_cost(out / "cell"), "stop": s["stop"],
+            "thickness_m": {"loose": s["loose"]["thickness_m"],
+                            "crimped": s["crimped"]["thickness_m"]},
+            "crimp_pct": s["crimped"]["crimp_pct"],
+            "yarn_tension_cn_per_tex": _families(s["yarn_tension"], "cn_per_tex"),
+            "pass_through": s["pass_through"]}
+
+
+def piece_measures(model, cell: dict) -> dict:
+    """Thickness [m] and crimp [%] of a piece, whole and interior, against the cell's."""
+    from fabmd.results.measure import fabric_measures
+    from fabmd.results.yarn_tension import yarn_tension
+
+    whole = fabric_measures(model)
+    inner = fabric_measures(model, edge_m=PIECE_EDGE_M)
+    ref_t = cell["thickness_m"]["crimped"]
+    return {"beads": model.n_beads,
+            "thickness_m": {"whole": whole["thickness_m"], "interior": inner["thickness_m"],
+                            "cell": ref_t},
+            "thickness_vs_cell_pct": {"whole": 100 * (whole["thickness_m"] / ref_t - 1),
+                                      "interior": 100 * (inner["thickness_m"] / ref_t - 1)},
+            "crimp_pct": {"whole": whole["crimp_pct"], "interior": inner["crimp_pct"],
+                          "cell": cell["crimp_pct"]},
+            "interior_edge_m": PIECE_EDGE_M,
+            "yarn_tension_cn_per_tex": _families(yarn_tension(model), "cn_per_tex")}
+
+
+def stage_piece(scene, out: Path, engine, cell: dict, cells: int) -> dict:
+    """(b) ``cells`` × ``cells`` crimped cells tiled, cut free and relaxed (the crimp's
+    tension kept: the yarns let go only where they are cut)."""
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.crimp import load_crimped
+    from fabmd.settings import build
+
+    size = scene.fabric.unit_cell_m
+    coupon = build(Coupon, {"length_m": cells * size[0], "width_m": cells * size[1]},
+                   "piece.coupon", contact=scene.contact)
+    t0 = time.perf_counter()
+    result = coupon.run(load_crimped(out / "cell"), out / "piece", engine=engine,
+                        overwrite=True)
+    wall = time.perf_counter() - t0
+    return {"folder": str(out / "piece"), "cells": [cells, cells], "method": "tiled",
+            "wall_s": wall, **lammps_cost(out / "piece"),
+            "stop": result.summary.get("stop"), **piece_measures(result.model, cell)}
+
+
+def stage_loose(scene, out: Path, engine, cell: dict, cells: int) -> dict:
+    """(b') The ``cells`` × ``cells`` piece crimped from loose as a finite piece."""
+    from fabmd.model.fabric_model import render_fabric
+    from fabmd.stages import crimp_stage
+
+    fabric = dataclasses.replace(scene.fabric, periodic=False, tiling=(cells, cells))
+    loose = render_fabric(fabric, scene.discretisation)
+    t0 = time.perf_counter()
+    result = crimp_stage(scene).run(loose, out / "loose", engine=engine, overwrite=True)
+    wall = time.perf_counter() - t0
+    return {"folder": str(out / "loose"), "cells": [cells, cells], "method": "from loose",
+            "wall_s": wall, **lammps_cost(out / "loose"), "stop": result.summary["stop"],
+            **piece_measures(result.model, cell)}
+
+
+def _curve(folder: Path) -> dict:
+    data = np.genfromtxt(folder / "curve.csv", delimiter=",", names=True)
+    return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+
+
+def tangent_stiffness(x, y, lo: float, hi: float) -> float | None:
+    """Slope of the least-squares line of ``y`` over ``lo <= x <= hi`` (None: < 3 points)."""
+    sel = (x >= lo) & (x <= hi)
+    if sel.sum() < 3:
+        return None
+    return float(np.polyfit(x[sel], y[sel], 1)[0])
+
+
+def _verdict(test_summary: dict) -> dict:
+    """The quasi-static verdict: whole run and per interval (failed intervals listed)."""
+    qs = test_summary.get("quasi_static") or {}
+    intervals = test_summary.get("quasi_static_intervals") or {}
+    failed = [{k: i.get(k) for k in ("start", "end", "problems") if k in i}
+              for i in intervals.get("intervals", []) if i.get("problems")]
+    return {"ok": qs.get("ok"), "problems": qs.get("problems", []),
+            "intervals": len(intervals.get("intervals", [])), "failed_intervals": failed}
+
+
+def stage_tension(scene, out: Path, engine) -> dict:
+    """(c) The warp-direction tension coupon on the crimped cell."""
+    from fabmd.pipeline import run_test
+
+    t0 = time.perf_counter()
+    summary = run_test(scene, "tension", out / "tension", engine=engine, overwrite=True,
+                       crimped=out / "cell")
+    wall = time.perf_counter() - t0
+    s = summary["test_summary"]
+    folder = Path(summary["results"])
+    c = _curve(folder)
+    x, f = c["elongation_pct"], c["force_per_width_n_m"]
+    soft = tangent_stiffness(x, f, *SOFT_RANGE_PCT)
+    stiff = tangent_stiffness(x, f, *STIFF_RANGE_PCT)
+    coupon = scene.protocols["tension"]["coupon"]
+    return {"folder": str(out / "tension"), "coupon": coupon, "beads": s["n_beads"],
+            "wall_s": wall, **lammps_cost(out / "tension"),
+            "coupon_stop": summary.get("coupon_stop"),
+            "force_at_elongation_n": s["force_at_elongation_n"],
+            "max_force_n": s["max_force_n"],
+            "bilinear": {k: s.get(k) for k in ("initial_stiffness_n_m_per_width",
+                                                "final_stiffness_n_m_per_width",
+                                                "transition_elongation_pct")},
+            "tangent_stiffness_n_m_per_width": {f"{SOFT_RANGE_PCT}": soft,
+                                                f"{STIFF_RANGE_PCT}": stiff},
+            "stiffening_ratio": stiff / soft if soft and stiff and soft > 0 else None,
+            "rises": bool(f[-1] > f[0] and f.max() > 0),
+            "midplane": midplane(folder / "trajectory.h5"),
+            "quasi_static": _verdict(s)}
+
+
+def stage_frame(scene, out: Path, engine) -> dict:
+    """(d) The picture frame on the crimped cell."""
+    from fabmd.pipeline import run_test
+
+    t0 = time.perf_counter()
+    summary = run_test(scene, "picture-frame", out / "frame", engine=engine, overwrite=True,
+                       crimped=out / "cell")
+    wall = time.perf_counter() - t0
+    s = summary["test_summary"]
+    folder = Path(summary["results"])
+    c = _curve(folder)
+    angle, force = c["shear_angle_deg"], c["normalised_force_n_m"]
+    reports = {f"{a:g}": float(np.interp(a, angle, force))
+               for a in (10, 20, 30, 40, 50, 60) if a <= angle.max() + 1e-9}
+    return {"folder": str(out / "frame"), "coupon": scene.protocols["picture_frame"]["coupon"],
+            "beads": summary["coupon_beads"], "wall_s": wall, **lammps_cost(out / "frame"),
+            "max_shear_angle_deg": float(angle.max()),
+            "normalised_force_n_m": reports,
+            "locking_angle_deg": s.get("locking_angle_deg"),
+            "midplane": midplane(folder / "trajectory.h5", central=0.3),
+            "quasi_static": _verdict(s)}
+
+
+def midplane_of(positions: np.ndarray, diameter_m: float) -> dict:
+    """Out-of-plane deviation of a sheet's midplane [m] (bead centres ``positions`` [m]).
+
+    The beads are binned in-plane (:data:`MIDPLANE_BIN_M`); a bin's midplane is the mean of
+    its highest and lowest bead centre, its thickness their distance plus a bead diameter;
+    bins with few beads (a ragged edge) are left out. ``max_deviation_m`` = max |midplane −
+    mean midplane| over the bins. Wrinkling shows as a deviation that grows to a fair part
+    of the thickness.
+    """
+    xy, z = positions[:, :2], positions[:, 2]
+    ij = np.floor((xy - xy.min(axis=0)) / MIDPLANE_BIN_M).astype(int)
+    key = ij[:, 0] * (ij[:, 1].max() + 1) + ij[:, 1]
+    order = np.argsort(key, kind="stable")
+    _, start = np.unique(key[order], return_index=True)
+    hi = np.maximum.reduceat(z[order], start)
+    lo = np.minimum.reduceat(z[order], start)
+    count = np.diff(np.append(start, len(order)))
+    full = count >= max(3, 0.25 * np.median(count))
+    mid, thick = 0.5 * (hi + lo)[full], (hi - lo)[full] + diameter_m
+    dev = np.abs(mid - mid.mean())
+    return {"bins": int(full.sum()), "max_deviation_m": float(dev.max()),
+            "rms_deviation_m": float(np.sqrt(np.mean(dev**2))),
+            "mean_thickness_m": float(thick.mean()),
+            "max_deviation_over_thickness": float(dev.max() / thick.mean())}
+
+
+def midplane(trajectory: Path, central: float | None = None) -> dict | None:
+    """:func:`midplane_of` on the first and the last frame of a trajectory; ``central``:
+    only beads within that fraction of the sheet's side from its centroid (a picture
+    frame's free fabric, away from the clamps)."""
+    from fabmd.analysis.trajectory_file import frame_count, read_model
+
+    if not Path(trajectory).exists():
+        return None
+    out = {"bin_m": MIDPLANE_BIN_M, "central_fraction": central}
+    for key, k in (("first", 0), ("last", frame_count(trajectory) - 1)):
+        model = read_model(trajectory, k)
+        p = model.unwrapped_positions
+        if central is not None:
+            xy = p[:, :2]
+            side = float(np.ptp(xy, axis=0).max())
+            p = p[np.linalg.norm(xy - xy.mean(axis=0), axis=1) <= central * side]
+        out[key] = {"frame": k, **midplane_of(p, float(model.diameters.max()))}
+    return out
+
+
+def stage_mpirun(scene, out: Path, ranks: int = 2) -> dict:
+    """The quick tension coupon's test again as a run folder run by ``mpirun -np ranks
+    lmp -in in.tension``; its curve against the in-process run's (same coupon)."""
+    from fabmd.engine import Engine
+    from fabmd.protocols.coupon import load_coupon
+    from fabmd.stages import protocol_stage
+
+    first = out / "tension" / "tension"
+    protocol = protocol_stage(scene, "tension")
+    t0 = time.perf_counter()
+    again = protocol.run(load_coupon(out / "tension" / "coupon"), out / "mpirun",
+                         engine=Engine(backend="standalone", ranks=ranks, progress=False),
+                         overwrite=True)
+    wall = time.perf_counter() - t0
+    a, b = _curve(first), again.curve
+    f_a = a["force_n"]
+    f_b = np.interp(a["elongation_pct"], b["elongation_pct"], b["force_n"])
+    cmd = (out / "mpirun" / "run.sh").read_text() if (out / "mpirun" / "run.sh").exists() \
+        else ""
+    return {"folder": str(out / "mpirun"), "ranks": ranks, "wall_s": wall,
+            **{k: v for k, v in lammps_cost(out / "mpirun").items() if k != "ranks"},
+            "lammps_ranks": lammps_cost(out / "mpirun")["ranks"],
+            "max_force_difference_over_peak": float(np.abs(f_b - f_a).max()
+                                                    / np.abs(f_a).max()),
+            "run_sh": bool(cmd)}
+
+
+# ---- plots ---------------------------------------------------------------------------------
+def plots(results: dict, out: Path) -> list[str]:
+    """The study's figures into ``out``: tension curve, picture-frame curve."""
+    from fabmd.results.plots import plot_curves
+
+    made = []
+    if "tension" in results:
+        r = results["tension"]
+        c = _curve(Path(r["folder"]) / "tension")
+        path = plot_curves(out / "study_tension.png", [
+            {"x": c["elongation_pct"], "y": c["force_per_width_n_m"], "label": "3D fabric"}],
+            "elongation [%]", "force per width [N/m]",
+            title=f"Warp tension, {r['coupon']['length_m']} x {r['coupon']['width_m']}",
+            notes=f"{r['beads']:,} beads, {r['steps']:,} steps")
+        made.append(str(path))
+    if "frame" in results:
+        r = results["frame"]
+        c = _curve(Path(r["folder"]) / "picture_frame")
+        path = plot_curves(out / "study_frame.png", [
+            {"x": c["shear_angle_deg"], "y": c["normalised_force_n_m"], "label": "3D fabric"}],
+            "shear angle [deg]", "normalised force [N/m]",
+            title=f"Picture frame, {r['coupon']['length_m']} square",
+            notes=f"{r['beads']:,} beads, {r['steps']:,} steps")
+        made.append(str(path))
+    return made
+
+
+# ---- main ----------------------------------------------------------------------------------
+def run(out: Path, stages=STAGES, ranks: int = 1, quick: bool = False,
+        scene_path: Path = SCENE) -> dict:
+    """Run ``stages`` into ``out`` (``cell`` first where a later stage needs it; a stage
+    finds an earlier one's folder from a previous call); returns and writes study.json."""
+    out = Path(out).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    scene = study_scene(quick, scene_path)
+    engine = engine_for(ranks)
+    cells = QUICK["piece_cells"] if quick else PIECE_CELLS
+    path = out / "study.json"
+    results = json.loads(path.read_text()) if path.exists() else {}
+    results.update({"scene": str(scene_path), "quick": quick, "ranks": ranks})
+    for stage in stages:
+        print(f"study: {stage} ...", flush=True)
+        if stage == "cell":
+            results["cell"] = stage_cell(scene, out, engine)
+        elif stage in ("piece", "loose"):
+            fn = stage_piece if stage == "piece" else stage_loose
+            results[stage] = fn(scene, out, engine, results["cell"], cells)
+        elif stage == "tension":
+            results["tension"] = stage_tension(scene, out, engine)
+        elif stage == "frame":
+            results["frame"] = stage_frame(scene, out, engine)
+        elif stage == "mpirun":
+            results["mpirun"] = stage_mpirun(scene, out)
+        else:
+            raise SystemExit(f"unknown stage {stage!r}; one of {', '.join(ALL_STAGES)}")
+        print(f"study: {stage} done in {results[stage]['wall_s']:.0f} s", flush=True)
+        path.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    results["figures"] = plots(results, out)
+    path.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", type=Path, required=True, help="results folder")
+    p.add_argument("--np", type=int, default=1, dest="ranks",
+                   help="MPI ranks (1: in-process; more: mpirun -np N lmp -in per stage)")
+    p.add_argument("--quick", action="store_true", help="the tiny setting (a few minutes)")
+    p.add_argument("--stages", default=None,
+                   help=f"comma-separated, in order (default {','.join(STAGES)}; "
+                        f"--quick adds mpirun; also: loose)")
+    args = p.parse_args(argv)
+    stages = args.stages.split(",") if args.stages else \
+        [*STAGES, "mpirun"] if args.quick else list(STAGES)
+    run(args.out, stages, args.ranks, args.quick)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
