@@ -107,11 +107,11 @@ def stage_cell(scene, out: Path, engine) -> dict:
     """(a) The periodic cell crimped as woven."""
     from fabmd.pipeline import run_crimp
 
-    t0 = time.perf_counter()
-    result = run_crimp(scene, out / "cell", engine=engine, overwrite=True, form="cell")
-    wall = time.perf_counter() - t0
-    s = result.summary
-    return {"folder": str(out / "cell"), "beads": s["crimped"]["n_beads"], "wall_s": wall,
+    if engine is not None:
+        run_crimp(scene, out / "cell", engine=engine, overwrite=True, form="cell")
+    s = json.loads((out / "cell" / "summary.json").read_text())
+    return {"folder": str(out / "cell"), "beads": s["crimped"]["n_beads"],
+            "wall_s": s.get("wall_s"), "backend": s.get("backend"),
             **lammps_cost(out / "cell"), "stop": s["stop"],
             "thickness_m": {"loose": s["loose"]["thickness_m"],
                             "crimped": s["crimped"]["thickness_m"]},
@@ -142,35 +142,48 @@ def piece_measures(model, cell: dict) -> dict:
 def stage_piece(scene, out: Path, engine, cell: dict, cells: int) -> dict:
     """(b) ``cells`` × ``cells`` crimped cells tiled, cut free and relaxed (the crimp's
     tension kept: the yarns let go only where they are cut)."""
-    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.coupon import Coupon, load_coupon
     from fabmd.protocols.crimp import load_crimped
     from fabmd.settings import build
 
     size = scene.fabric.unit_cell_m
     coupon = build(Coupon, {"length_m": cells * size[0], "width_m": cells * size[1]},
                    "piece.coupon", contact=scene.contact)
-    t0 = time.perf_counter()
-    result = coupon.run(load_crimped(out / "cell"), out / "piece", engine=engine,
-                        overwrite=True)
-    wall = time.perf_counter() - t0
+    wall = None
+    if engine is not None:
+        t0 = time.perf_counter()
+        coupon.run(load_crimped(out / "cell"), out / "piece", engine=engine, overwrite=True)
+        wall = time.perf_counter() - t0
+    summary = json.loads((out / "piece" / "summary.json").read_text())
     return {"folder": str(out / "piece"), "cells": [cells, cells], "method": "tiled",
-            "wall_s": wall, **lammps_cost(out / "piece"),
-            "stop": result.summary.get("stop"), **piece_measures(result.model, cell)}
+            "wall_s": wall, **lammps_cost(out / "piece"), "stop": summary.get("stop"),
+            **piece_measures(load_coupon(out / "piece"), cell)}
 
 
 def stage_loose(scene, out: Path, engine, cell: dict, cells: int) -> dict:
     """(b') The ``cells`` × ``cells`` piece crimped from loose as a finite piece."""
     from fabmd.model.fabric_model import render_fabric
+    from fabmd.protocols.crimp import load_crimped
     from fabmd.stages import crimp_stage
 
-    fabric = dataclasses.replace(scene.fabric, periodic=False, tiling=(cells, cells))
-    loose = render_fabric(fabric, scene.discretisation)
-    t0 = time.perf_counter()
-    result = crimp_stage(scene).run(loose, out / "loose", engine=engine, overwrite=True)
-    wall = time.perf_counter() - t0
+    if engine is not None:
+        fabric = dataclasses.replace(scene.fabric, periodic=False, tiling=(cells, cells))
+        loose = render_fabric(fabric, scene.discretisation)
+        crimp_stage(scene).run(loose, out / "loose", engine=engine, overwrite=True)
+    s = json.loads((out / "loose" / "summary.json").read_text())
     return {"folder": str(out / "loose"), "cells": [cells, cells], "method": "from loose",
-            "wall_s": wall, **lammps_cost(out / "loose"), "stop": result.summary["stop"],
-            **piece_measures(result.model, cell)}
+            "wall_s": s.get("wall_s"), **lammps_cost(out / "loose"), "stop": s["stop"],
+            "pass_through": s["pass_through"],
+            **piece_measures(load_crimped(out / "loose"), cell)}
+
+
+def stage_wall(folder: Path, test_summary: dict) -> dict:
+    """Wall time [s] of a test stage as its summaries recorded it: the test's engine wall
+    time plus the coupon's LAMMPS loop time (the coupon summary keeps no wall time)."""
+    coupon = lammps_cost(folder / "coupon")["loop_s"]
+    test = test_summary.get("wall_s")
+    return {"wall_s": None if test is None else test + coupon, "test_wall_s": test,
+            "coupon_loop_s": coupon, "backend": test_summary.get("backend")}
 
 
 def _curve(folder: Path) -> dict:
@@ -200,10 +213,10 @@ def stage_tension(scene, out: Path, engine) -> dict:
     """(c) The warp-direction tension coupon on the crimped cell."""
     from fabmd.pipeline import run_test
 
-    t0 = time.perf_counter()
-    summary = run_test(scene, "tension", out / "tension", engine=engine, overwrite=True,
-                       crimped=out / "cell")
-    wall = time.perf_counter() - t0
+    if engine is not None:
+        run_test(scene, "tension", out / "tension", engine=engine, overwrite=True,
+                 crimped=out / "cell")
+    summary = json.loads((out / "tension" / "summary.json").read_text())
     s = summary["test_summary"]
     folder = Path(summary["results"])
     c = _curve(folder)
@@ -212,7 +225,7 @@ def stage_tension(scene, out: Path, engine) -> dict:
     stiff = tangent_stiffness(x, f, *STIFF_RANGE_PCT)
     coupon = scene.protocols["tension"]["coupon"]
     return {"folder": str(out / "tension"), "coupon": coupon, "beads": s["n_beads"],
-            "wall_s": wall, **lammps_cost(out / "tension"),
+            **stage_wall(out / "tension", s), **lammps_cost(out / "tension"),
             "coupon_stop": summary.get("coupon_stop"),
             "force_at_elongation_n": s["force_at_elongation_n"],
             "max_force_n": s["max_force_n"],
@@ -231,10 +244,10 @@ def stage_frame(scene, out: Path, engine) -> dict:
     """(d) The picture frame on the crimped cell."""
     from fabmd.pipeline import run_test
 
-    t0 = time.perf_counter()
-    summary = run_test(scene, "picture-frame", out / "frame", engine=engine, overwrite=True,
-                       crimped=out / "cell")
-    wall = time.perf_counter() - t0
+    if engine is not None:
+        run_test(scene, "picture-frame", out / "frame", engine=engine, overwrite=True,
+                 crimped=out / "cell")
+    summary = json.loads((out / "frame" / "summary.json").read_text())
     s = summary["test_summary"]
     folder = Path(summary["results"])
     c = _curve(folder)
@@ -242,7 +255,8 @@ def stage_frame(scene, out: Path, engine) -> dict:
     reports = {f"{a:g}": float(np.interp(a, angle, force))
                for a in (10, 20, 30, 40, 50, 60) if a <= angle.max() + 1e-9}
     return {"folder": str(out / "frame"), "coupon": scene.protocols["picture_frame"]["coupon"],
-            "beads": summary["coupon_beads"], "wall_s": wall, **lammps_cost(out / "frame"),
+            "beads": summary["coupon_beads"], **stage_wall(out / "frame", s),
+            **lammps_cost(out / "frame"),
             "max_shear_angle_deg": float(angle.max()),
             "normalised_force_n_m": reports,
             "locking_angle_deg": s.get("locking_angle_deg"),
@@ -350,15 +364,104 @@ def plots(results: dict, out: Path) -> list[str]:
     return made
 
 
+# ---- the table of the README ---------------------------------------------------------------
+def _mm(m) -> str:
+    return "–" if m is None else f"{1e3 * m:.2f}"
+
+
+def _pct(values: dict) -> str:
+    return ", ".join(f"{f} {v:.2f}" for f, v in values.items())
+
+
+def _time(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min"
+
+
+def _cost(r: dict) -> str:
+    wall = r.get("wall_s")
+    ranks = "/".join(str(n) for n in r["ranks"])
+    return (f"{r['beads']:,} beads, {r['steps']:,} steps, {ranks} rank(s), "
+            f"LAMMPS loop {_time(r['loop_s'])}" + (f", wall {_time(wall)}" if wall else ""))
+
+
+def table(results: dict) -> str:
+    """The results as a markdown table (one row per stage that ran)."""
+    rows = []
+    if "cell" in results:
+        r = results["cell"]
+        rows.append(["(a) periodic cell, crimped", _cost(r),
+                     f"thickness {_mm(r['thickness_m']['loose'])} → "
+                     f"{_mm(r['thickness_m']['crimped'])} mm; crimp % {_pct(r['crimp_pct'])}; "
+                     f"tension cN/tex {_pct(r['yarn_tension_cn_per_tex'])}; "
+                     f"{r['pass_through']['flipped_pairs']} flipped pairs; {r['stop']}"])
+    for key in ("piece", "loose"):
+        if key in results:
+            r = results[key]
+            t, c = r["thickness_m"], r["crimp_pct"]
+            rows.append([f"(b) {r['cells'][0]} × {r['cells'][1]}-cell piece, {r['method']}",
+                         _cost(r),
+                         f"thickness interior {_mm(t['interior'])} mm "
+                         f"({r['thickness_vs_cell_pct']['interior']:+.1f} % against the cell), "
+                         f"whole {_mm(t['whole'])} mm "
+                         f"({r['thickness_vs_cell_pct']['whole']:+.1f} %); crimp % interior "
+                         f"{_pct(c['interior'])}, whole {_pct(c['whole'])}; {r['stop']}"])
+    if "tension" in results:
+        r = results["tension"]
+        k = r["tangent_stiffness_n_m_per_width"]
+        soft, stiff = k[str(SOFT_RANGE_PCT)], k[str(STIFF_RANGE_PCT)]
+        f = r["force_at_elongation_n"]
+        m = r["midplane"]["last"] if r.get("midplane") else None
+        rows.append([f"(c) tension {r['coupon']['length_m']} × {r['coupon']['width_m']}",
+                     _cost(r),
+                     f"F at 0.5/1/2 % {f['0.5']:.1f} / {f['1']:.1f} / {f['2']:.1f} N; "
+                     f"tangent stiffness {SOFT_RANGE_PCT[0]}–{SOFT_RANGE_PCT[1]} % "
+                     f"{soft:.3g} N/m, {STIFF_RANGE_PCT[0]}–{STIFF_RANGE_PCT[1]} % "
+                     f"{stiff:.3g} N/m (× {r['stiffening_ratio']:.2f}); bilinear break "
+                     f"{r['bilinear']['transition_elongation_pct']:.2f} %"
+                     + (f"; midplane max |z − mean| {_mm(m['max_deviation_m'])} mm of "
+                        f"{_mm(m['mean_thickness_m'])} mm" if m else "")
+                     + f"; quasi-static: {_qs(r['quasi_static'])}"])
+    if "frame" in results:
+        r = results["frame"]
+        m = r["midplane"]
+        f = r["normalised_force_n_m"]
+        rows.append([f"(d) picture frame {r['coupon']['length_m']} square", _cost(r),
+                     "F_norm " + ", ".join(f"{a}° {v:.3g}" for a, v in f.items()) + " N/m; "
+                     f"locking angle {r['locking_angle_deg']:.1f}°"
+                     + (f"; midplane max |z − mean| {_mm(m['first']['max_deviation_m'])} → "
+                        f"{_mm(m['last']['max_deviation_m'])} mm, thickness "
+                        f"{_mm(m['first']['mean_thickness_m'])} → "
+                        f"{_mm(m['last']['mean_thickness_m'])} mm" if m else "")
+                     + f"; quasi-static: {_qs(r['quasi_static'])}"])
+    if "mpirun" in results:
+        r = results["mpirun"]
+        rows.append([f"mpirun -np {r['ranks']} lmp -in (quick tension)",
+                     f"{r['steps']:,} steps, LAMMPS ranks {r['lammps_ranks']}",
+                     f"force against the in-process curve: max difference "
+                     f"{100 * r['max_force_difference_over_peak']:.2g} % of the peak"])
+    lines = ["| stage | cost | result |", "|---|---|---|"]
+    lines += [f"| {' | '.join(row)} |" for row in rows]
+    return "\n".join(lines)
+
+
+def _qs(verdict: dict) -> str:
+    if verdict["ok"]:
+        return f"ok ({verdict['intervals']} intervals)"
+    failed = verdict["failed_intervals"]
+    return (f"{len(failed)} of {verdict['intervals']} intervals flagged"
+            if failed else "; ".join(verdict["problems"][:2]))
+
+
 # ---- main ----------------------------------------------------------------------------------
 def run(out: Path, stages=STAGES, ranks: int = 1, quick: bool = False,
-        scene_path: Path = SCENE) -> dict:
+        scene_path: Path = SCENE, summarise: bool = False) -> dict:
     """Run ``stages`` into ``out`` (``cell`` first where a later stage needs it; a stage
-    finds an earlier one's folder from a previous call); returns and writes study.json."""
+    finds an earlier one's folder from a previous call); returns and writes study.json.
+    ``summarise``: run nothing, read the stages' finished folders back."""
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     scene = study_scene(quick, scene_path)
-    engine = engine_for(ranks)
+    engine = None if summarise else engine_for(ranks)
     cells = QUICK["piece_cells"] if quick else PIECE_CELLS
     path = out / "study.json"
     results = json.loads(path.read_text()) if path.exists() else {}
@@ -375,13 +478,16 @@ def run(out: Path, stages=STAGES, ranks: int = 1, quick: bool = False,
         elif stage == "frame":
             results["frame"] = stage_frame(scene, out, engine)
         elif stage == "mpirun":
-            results["mpirun"] = stage_mpirun(scene, out)
+            if not summarise:  # its result is only what the run measured
+                results["mpirun"] = stage_mpirun(scene, out)
         else:
             raise SystemExit(f"unknown stage {stage!r}; one of {', '.join(ALL_STAGES)}")
-        print(f"study: {stage} done in {results[stage]['wall_s']:.0f} s", flush=True)
+        wall = results.get(stage, {}).get("wall_s")
+        print(f"study: {stage} done" + (f" ({wall:.0f} s wall)" if wall else ""), flush=True)
         path.write_text(json.dumps(results, indent=1, default=float) + "\n")
     results["figures"] = plots(results, out)
     path.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    print(table(results), flush=True)
     return results
 
 
@@ -394,10 +500,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--stages", default=None,
                    help=f"comma-separated, in order (default {','.join(STAGES)}; "
                         f"--quick adds mpirun; also: loose)")
+    p.add_argument("--summarise", action="store_true",
+                   help="run nothing: read the stages' finished folders in --out back")
     args = p.parse_args(argv)
     stages = args.stages.split(",") if args.stages else \
         [*STAGES, "mpirun"] if args.quick else list(STAGES)
-    run(args.out, stages, args.ranks, args.quick)
+    run(args.out, stages, args.ranks, args.quick, summarise=args.summarise)
     return 0
 
 
