@@ -221,8 +221,10 @@ def stage_tension(scene, out: Path, engine) -> dict:
     folder = Path(summary["results"])
     c = _curve(folder)
     x, f = c["elongation_pct"], c["force_per_width_n_m"]
-    soft = tangent_stiffness(x, f, *SOFT_RANGE_PCT)
-    stiff = tangent_stiffness(x, f, *STIFF_RANGE_PCT)
+    # N/m per unit strain (fabmd's stiffness unit): the slope per % times 100
+    soft, stiff = (None if k is None else 100 * k for k in
+                   (tangent_stiffness(x, f, *SOFT_RANGE_PCT),
+                    tangent_stiffness(x, f, *STIFF_RANGE_PCT)))
     coupon = scene.protocols["tension"]["coupon"]
     return {"folder": str(out / "tension"), "coupon": coupon, "beads": s["n_beads"],
             **stage_wall(out / "tension", s), **lammps_cost(out / "tension"),
@@ -415,8 +417,9 @@ def table(results: dict) -> str:
                      _cost(r),
                      f"F at 0.5/1/2 % {f['0.5']:.1f} / {f['1']:.1f} / {f['2']:.1f} N; "
                      f"tangent stiffness {SOFT_RANGE_PCT[0]}–{SOFT_RANGE_PCT[1]} % "
-                     f"{soft:.3g} N/m, {STIFF_RANGE_PCT[0]}–{STIFF_RANGE_PCT[1]} % "
-                     f"{stiff:.3g} N/m (× {r['stiffening_ratio']:.2f}); bilinear break "
+                     f"{soft:.3g}, {STIFF_RANGE_PCT[0]}–{STIFF_RANGE_PCT[1]} % "
+                     f"{stiff:.3g} N/m per unit strain (× {r['stiffening_ratio']:.2f}); "
+                     f"bilinear break "
                      f"{r['bilinear']['transition_elongation_pct']:.2f} %"
                      + (f"; midplane max |z − mean| {_mm(m['max_deviation_m'])} mm of "
                         f"{_mm(m['mean_thickness_m'])} mm" if m else "")
