@@ -14,6 +14,9 @@ Stages (each a fabmd run folder under ``--out``; every one runs again with plain
               from the crimped cell, its crimp tension relieved, relaxed, pulled);
 * ``frame``   a 40 × 40 mm picture frame to 60° on the same crimped cell; the midplane of
               the sheared fabric against its thickness (wrinkling);
+* ``stuffer`` (not in the default list) why the tension has no toe: a 48 × 20 mm coupon
+              of the cell as crimped and of the cell crimped with its stuffers 1.5 %
+              longer (wavy);
 * ``mpirun``  (``--quick`` only by default) the quick tension coupon again as a run folder run
               by ``mpirun -np 2 lmp -in`` (the standalone back end): its curve against the
               in-process one.
@@ -42,7 +45,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "interlock_3d_study.toml"
 STAGES = ("cell", "piece", "tension", "frame")
-ALL_STAGES = (*STAGES, "loose", "mpirun")
+ALL_STAGES = (*STAGES, "loose", "stuffer", "mpirun")
 
 #: the tiny setting of ``--quick`` (scene tables replaced; the fabric is the same)
 QUICK = {
@@ -57,6 +60,9 @@ PIECE_CELLS = 6
 PIECE_EDGE_M = 0.024
 #: elongation ranges [%] of the tangent stiffness before and after the warp straightens
 SOFT_RANGE_PCT, STIFF_RANGE_PCT = (0.2, 1.0), (1.5, 3.0)
+#: the stuffer experiment: the stuffers' extra rest-length strain and the coupon
+STUFFER_EXPANSION = 0.015
+STUFFER_COUPON = {"length_m": "48 mm", "width_m": "20 mm"}
 #: in-plane bin of the midplane measure [m] (about a cell's weft columns)
 MIDPLANE_BIN_M = 0.004
 
@@ -339,6 +345,45 @@ def stage_mpirun(scene, out: Path, ranks: int = 2) -> dict:
             "run_sh": bool(cmd)}
 
 
+def stage_stuffer(scene, out: Path, engine, expansion: float = STUFFER_EXPANSION) -> dict:
+    """Why the warp tension has no toe: the stuffers come out of the crimp straight. The
+    tension test on a short coupon (:data:`STUFFER_COUPON`, the study's loading speed) of
+    the cell as crimped, and of the cell crimped with the stuffers' rest length also
+    lengthened by ``expansion`` (they buckle between the binders: crimp, slack)."""
+    from fabmd.pipeline import run_crimp, run_test
+
+    out = out / "stuffer"
+    results = {}
+    for name, extra in (("straight", 0.0), ("wavy", expansion)):
+        protocols = copy.deepcopy(scene.protocols)
+        crimp = protocols.setdefault("crimp", {})
+        crimp["expansion"] = {**crimp.get("expansion", {}), **({"warp": extra} if extra else {})}
+        protocols["tension"] = {**protocols.get("tension", {}), "coupon": STUFFER_COUPON}
+        variant = dataclasses.replace(scene, protocols=protocols)
+        if engine is not None:
+            run_crimp(variant, out / name / "cell", engine=engine, overwrite=True, form="cell")
+            run_test(variant, "tension", out / name / "tension", engine=engine, overwrite=True,
+                     crimped=out / name / "cell")
+        cell = json.loads((out / name / "cell" / "summary.json").read_text())
+        test = json.loads((out / name / "tension" / "summary.json").read_text())
+        t = test["test_summary"]
+        c = _curve(out / name / "tension" / "tension")
+        x, f = c["elongation_pct"], c["force_per_width_n_m"]
+        results[name] = {
+            "warp_expansion": extra, "cell_crimp_pct": cell["crimped"]["crimp_pct"],
+            "beads": t["n_beads"], **lammps_cost(out / name),
+            "force_at_elongation_n": t["force_at_elongation_n"],
+            "tangent_stiffness_n_m_per_width": {
+                f"{lo}-{hi}": 100 * tangent_stiffness(x, f, lo, hi)
+                for lo, hi in ((0.2, 0.6), (0.6, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 3.0))},
+            "bilinear": {k: t.get(k) for k in ("initial_stiffness_n_m_per_width",
+                                                "final_stiffness_n_m_per_width",
+                                                "transition_elongation_pct")},
+            "quasi_static": _verdict(t), "folder": str(out / name)}
+    results["wall_s"] = None
+    return results
+
+
 # ---- plots ---------------------------------------------------------------------------------
 def plots(results: dict, out: Path) -> list[str]:
     """The study's figures into ``out``: tension curve, picture-frame curve."""
@@ -362,6 +407,19 @@ def plots(results: dict, out: Path) -> list[str]:
             "shear angle [deg]", "normalised force [N/m]",
             title=f"Picture frame, {r['coupon']['length_m']} square",
             notes=f"{r['beads']:,} beads, {r['steps']:,} steps")
+        made.append(str(path))
+    if "stuffer" in results:
+        r = results["stuffer"]
+        series = []
+        for name in ("straight", "wavy"):
+            c = _curve(Path(r[name]["folder"]) / "tension" / "tension")
+            crimp = r[name]["cell_crimp_pct"]["warp"]
+            series.append({"x": c["elongation_pct"], "y": c["force_per_width_n_m"],
+                           "label": f"stuffers {name} (crimp {crimp:.2f} %)"})
+        path = plot_curves(out / "study_stuffer.png", series, "elongation [%]",
+                           "force per width [N/m]",
+                           title=f"Warp tension, {STUFFER_COUPON['length_m']} x "
+                                 f"{STUFFER_COUPON['width_m']}: straight or wavy stuffers")
         made.append(str(path))
     return made
 
@@ -436,6 +494,16 @@ def table(results: dict) -> str:
                         f"{_mm(m['first']['mean_thickness_m'])} → "
                         f"{_mm(m['last']['mean_thickness_m'])} mm" if m else "")
                      + f"; quasi-static: {_qs(r['quasi_static'])}"])
+    if "stuffer" in results:
+        for name in ("straight", "wavy"):
+            r = results["stuffer"][name]
+            k = r["tangent_stiffness_n_m_per_width"]
+            rows.append([f"stuffers {name} (expansion {r['warp_expansion']:+.3f}), tension "
+                         f"{STUFFER_COUPON['length_m']} × {STUFFER_COUPON['width_m']}",
+                         _cost(r), f"cell crimp % {_pct(r['cell_crimp_pct'])}; tangent "
+                         "stiffness N/m per unit strain " + ", ".join(
+                             f"{band} % {v:.3g}" for band, v in k.items())
+                         + f"; quasi-static: {_qs(r['quasi_static'])}"])
     if "mpirun" in results:
         r = results["mpirun"]
         rows.append([f"mpirun -np {r['ranks']} lmp -in (quick tension)",
@@ -480,6 +548,8 @@ def run(out: Path, stages=STAGES, ranks: int = 1, quick: bool = False,
             results["tension"] = stage_tension(scene, out, engine)
         elif stage == "frame":
             results["frame"] = stage_frame(scene, out, engine)
+        elif stage == "stuffer":
+            results["stuffer"] = stage_stuffer(scene, out, engine)
         elif stage == "mpirun":
             if not summarise:  # its result is only what the run measured
                 results["mpirun"] = stage_mpirun(scene, out)
