@@ -14,6 +14,8 @@ Stages (each a fabmd run folder under ``--out``; every one runs again with plain
               from the crimped cell, its crimp tension relieved, relaxed, pulled);
 * ``frame``   a 40 × 40 mm picture frame to 60° on the same crimped cell; the midplane of
               the sheared fabric against its thickness (wrinkling);
+* ``frame-check`` (not in the default list) a 20 × 20 mm frame at 0.3 × the loading
+              speed: quasi-static where the 40 mm frame at the default speed is not;
 * ``stuffer`` (not in the default list) why the tension has no toe: a 48 × 20 mm coupon
               of the cell as crimped and of the cell crimped with its stuffers 1.5 %
               longer (wavy);
@@ -45,7 +47,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "interlock_3d_study.toml"
 STAGES = ("cell", "piece", "tension", "frame")
-ALL_STAGES = (*STAGES, "loose", "stuffer", "mpirun")
+ALL_STAGES = (*STAGES, "frame-check", "loose", "stuffer", "mpirun")
 
 #: the tiny setting of ``--quick`` (scene tables replaced; the fabric is the same)
 QUICK = {
@@ -63,6 +65,8 @@ SOFT_RANGE_PCT, STIFF_RANGE_PCT = (0.2, 1.0), (1.5, 3.0)
 #: the stuffer experiment: the stuffers' extra rest-length strain and the coupon
 STUFFER_EXPANSION = 0.015
 STUFFER_COUPON = {"length_m": "48 mm", "width_m": "20 mm"}
+#: the picture frame's quasi-static check: a 20 mm frame at 0.3 × the default speed
+FRAME_CHECK = {"speed_fraction": 3e-4, "coupon": {"length_m": "20 mm", "width_m": "20 mm"}}
 #: in-plane bin of the midplane measure [m] (about a cell's weft columns)
 MIDPLANE_BIN_M = 0.004
 
@@ -248,28 +252,40 @@ def stage_tension(scene, out: Path, engine) -> dict:
             "quasi_static": _verdict(s)}
 
 
-def stage_frame(scene, out: Path, engine) -> dict:
-    """(d) The picture frame on the crimped cell."""
+def stage_frame(scene, out: Path, engine, name: str = "frame") -> dict:
+    """(d) The picture frame on the crimped cell (``name``: its folder)."""
     from fabmd.pipeline import run_test
 
     if engine is not None:
-        run_test(scene, "picture-frame", out / "frame", engine=engine, overwrite=True,
+        run_test(scene, "picture-frame", out / name, engine=engine, overwrite=True,
                  crimped=out / "cell")
-    summary = json.loads((out / "frame" / "summary.json").read_text())
+    summary = json.loads((out / name / "summary.json").read_text())
     s = summary["test_summary"]
     folder = Path(summary["results"])
     c = _curve(folder)
     angle, force = c["shear_angle_deg"], c["normalised_force_n_m"]
     reports = {f"{a:g}": float(np.interp(a, angle, force))
                for a in (10, 20, 30, 40, 50, 60) if a <= angle.max() + 1e-9}
-    return {"folder": str(out / "frame"), "coupon": scene.protocols["picture_frame"]["coupon"],
-            "beads": summary["coupon_beads"], **stage_wall(out / "frame", s),
-            **lammps_cost(out / "frame"),
+    table = scene.protocols["picture_frame"]
+    return {"folder": str(out / name), "coupon": table["coupon"],
+            "speed_fraction": table.get("speed_fraction", 1e-3),
+            "beads": summary["coupon_beads"], **stage_wall(out / name, s),
+            **lammps_cost(out / name),
             "max_shear_angle_deg": float(angle.max()),
             "normalised_force_n_m": reports,
             "locking_angle_deg": s.get("locking_angle_deg"),
+            "energy_balance": s.get("energy_balance"),
             "midplane": midplane(folder / "trajectory.h5", central=0.3),
             "quasi_static": _verdict(s)}
+
+
+def frame_check_scene(scene):
+    """The picture frame slower on a smaller frame (:data:`FRAME_CHECK`): the kinetic
+    energy of the fabric moving with the frame takes a share of the frame's work ∝
+    side × speed², here about 1/20 of the study frame's."""
+    protocols = copy.deepcopy(scene.protocols)
+    protocols["picture_frame"] = {**protocols.get("picture_frame", {}), **FRAME_CHECK}
+    return dataclasses.replace(scene, protocols=protocols)
 
 
 def midplane_of(positions: np.ndarray, diameter_m: float) -> dict:
@@ -399,14 +415,18 @@ def plots(results: dict, out: Path) -> list[str]:
             title=f"Warp tension, {r['coupon']['length_m']} x {r['coupon']['width_m']}",
             notes=f"{r['beads']:,} beads, {r['steps']:,} steps")
         made.append(str(path))
-    if "frame" in results:
-        r = results["frame"]
-        c = _curve(Path(r["folder"]) / "picture_frame")
-        path = plot_curves(out / "study_frame.png", [
-            {"x": c["shear_angle_deg"], "y": c["normalised_force_n_m"], "label": "3D fabric"}],
-            "shear angle [deg]", "normalised force [N/m]",
-            title=f"Picture frame, {r['coupon']['length_m']} square",
-            notes=f"{r['beads']:,} beads, {r['steps']:,} steps")
+    series = []
+    for key in ("frame", "frame-check"):
+        if key in results:
+            r = results[key]
+            c = _curve(Path(r["folder"]) / "picture_frame")
+            series.append({"x": c["shear_angle_deg"], "y": c["normalised_force_n_m"],
+                           "label": f"{r['coupon']['length_m']} frame, speed "
+                                    f"{r['speed_fraction']:g} ({r['beads']:,} beads, "
+                                    f"{r['steps']:,} steps)"})
+    if series:
+        path = plot_curves(out / "study_frame.png", series, "shear angle [deg]",
+                           "normalised force [N/m]", title="Picture frame, 3D fabric")
         made.append(str(path))
     if "stuffer" in results:
         r = results["stuffer"]
@@ -482,17 +502,25 @@ def table(results: dict) -> str:
                      + (f"; midplane max |z − mean| {_mm(m['max_deviation_m'])} mm of "
                         f"{_mm(m['mean_thickness_m'])} mm" if m else "")
                      + f"; quasi-static: {_qs(r['quasi_static'])}"])
-    if "frame" in results:
-        r = results["frame"]
+    for key in ("frame", "frame-check"):
+        if key not in results:
+            continue
+        r = results[key]
         m = r["midplane"]
         f = r["normalised_force_n_m"]
-        rows.append([f"(d) picture frame {r['coupon']['length_m']} square", _cost(r),
+        e = r.get("energy_balance") or {}
+        kinetic = (e["kinetic_energy_change_j"] / e["external_work_j"]
+                   if e.get("external_work_j") else None)
+        rows.append([f"(d) picture frame {r['coupon']['length_m']} square, speed "
+                     f"{r['speed_fraction']:g}", _cost(r),
                      "F_norm " + ", ".join(f"{a}° {v:.3g}" for a, v in f.items()) + " N/m; "
                      f"locking angle {r['locking_angle_deg']:.1f}°"
                      + (f"; midplane max |z − mean| {_mm(m['first']['max_deviation_m'])} → "
                         f"{_mm(m['last']['max_deviation_m'])} mm, thickness "
                         f"{_mm(m['first']['mean_thickness_m'])} → "
                         f"{_mm(m['last']['mean_thickness_m'])} mm" if m else "")
+                     + (f"; kinetic energy {100 * kinetic:.0f} % of the frame's work"
+                        if kinetic is not None else "")
                      + f"; quasi-static: {_qs(r['quasi_static'])}"])
     if "stuffer" in results:
         for name in ("straight", "wavy"):
@@ -548,6 +576,8 @@ def run(out: Path, stages=STAGES, ranks: int = 1, quick: bool = False,
             results["tension"] = stage_tension(scene, out, engine)
         elif stage == "frame":
             results["frame"] = stage_frame(scene, out, engine)
+        elif stage == "frame-check":
+            results[stage] = stage_frame(frame_check_scene(scene), out, engine, stage)
         elif stage == "stuffer":
             results["stuffer"] = stage_stuffer(scene, out, engine)
         elif stage == "mpirun":
