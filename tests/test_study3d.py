@@ -18,8 +18,8 @@ ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "examples" / "interlock_3d_study"
 SCENE = STUDY / "interlock_3d_study.toml"
 EXAMPLE = ROOT / "examples" / "through_thickness_3d.toml"
-#: 2 ranks sum forces in another order: contact and friction let the runs part slowly
-MPI_TOLERANCE = 0.02
+#: 2 ranks sum forces in another order; measured: 6e-7 of the peak on the quick coupon
+MPI_TOLERANCE = 1e-4
 
 
 def study_module():

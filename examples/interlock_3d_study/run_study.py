@@ -428,6 +428,17 @@ def plots(results: dict, out: Path) -> list[str]:
         path = plot_curves(out / "study_frame.png", series, "shear angle [deg]",
                            "normalised force [N/m]", title="Picture frame, 3D fabric")
         made.append(str(path))
+    if "frame" in results:  # the sheared fabric: top view and two cuts
+        from fabmd.analysis.trajectory_file import read_model
+        from fabmd.results.preview import preview_png
+
+        r = results["frame"]
+        traj = Path(r["folder"]) / "picture_frame" / "trajectory.h5"
+        if traj.exists():
+            path = preview_png(read_model(traj, -1), out / "study_frame_sheared.png",
+                               title=f"Picture frame {r['coupon']['length_m']} at "
+                                     f"{r['max_shear_angle_deg']:.0f} deg")
+            made.append(str(path))
     if "stuffer" in results:
         r = results["stuffer"]
         series = []
@@ -442,6 +453,21 @@ def plots(results: dict, out: Path) -> list[str]:
                                  f"{STUFFER_COUPON['width_m']}: straight or wavy stuffers")
         made.append(str(path))
     return made
+
+
+def small_png(src: Path, dst: Path, max_bytes: int = 200_000) -> Path | None:
+    """``src`` as a palette PNG at ``dst``, halved until it is under ``max_bytes`` (the
+    repository takes no large pictures); None when it cannot be made that small."""
+    from PIL import Image
+
+    image = Image.open(src).convert("RGB")
+    for _ in range(4):
+        image.quantize(colors=64).save(dst, optimize=True)
+        if dst.stat().st_size < max_bytes:
+            return dst
+        image = image.resize((image.width * 3 // 4, image.height * 3 // 4), Image.LANCZOS)
+    dst.unlink()
+    return None
 
 
 # ---- the table of the README ---------------------------------------------------------------
@@ -603,12 +629,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--stages", default=None,
                    help=f"comma-separated, in order (default {','.join(STAGES)}; "
                         f"--quick adds mpirun; also: loose)")
+    p.add_argument("--pictures", type=Path, default=None,
+                   help="copy the study's figures, each under 200 kB, into this folder")
     p.add_argument("--summarise", action="store_true",
                    help="run nothing: read the stages' finished folders in --out back")
     args = p.parse_args(argv)
     stages = args.stages.split(",") if args.stages else \
         [*STAGES, "mpirun"] if args.quick else list(STAGES)
-    run(args.out, stages, args.ranks, args.quick, summarise=args.summarise)
+    results = run(args.out, stages, args.ranks, args.quick, summarise=args.summarise)
+    if args.pictures:
+        args.pictures.mkdir(parents=True, exist_ok=True)
+        for figure in results["figures"]:
+            made = small_png(Path(figure), args.pictures / Path(figure).name)
+            print(f"{figure} -> {made or 'over 200 kB: not copied'}")
     return 0
 
 
