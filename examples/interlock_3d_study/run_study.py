@@ -18,7 +18,7 @@ Stages (each a fabmd run folder under ``--out``; every one runs again with plain
               speed: quasi-static where the 40 mm frame at the default speed is not;
 * ``stuffer`` (not in the default list) why the tension has no toe: a 48 × 20 mm coupon
               of the cell as crimped and of the cell crimped with its stuffers 1.5 %
-              longer (wavy);
+              longer (wavy), both at s/d 0.9;
 * ``mpirun``  (``--quick`` only by default) the quick tension coupon again as a run folder run
               by ``mpirun -np 2 lmp -in`` (the standalone back end): its curve against the
               in-process one.
@@ -65,6 +65,7 @@ SOFT_RANGE_PCT, STIFF_RANGE_PCT = (0.2, 1.0), (1.5, 3.0)
 #: the stuffer experiment: the stuffers' extra rest-length strain and the coupon
 STUFFER_EXPANSION = 0.015
 STUFFER_COUPON = {"length_m": "48 mm", "width_m": "20 mm"}
+STUFFER_SPACING_RATIO = 0.9
 #: the picture frame's quasi-static check: a 20 mm frame at 0.3 × the default speed
 FRAME_CHECK = {"speed_fraction": 3e-4, "coupon": {"length_m": "20 mm", "width_m": "20 mm"}}
 #: in-plane bin of the midplane measure [m] (about a cell's weft columns)
@@ -365,7 +366,8 @@ def stage_stuffer(scene, out: Path, engine, expansion: float = STUFFER_EXPANSION
     """Why the warp tension has no toe: the stuffers come out of the crimp straight. The
     tension test on a short coupon (:data:`STUFFER_COUPON`, the study's loading speed) of
     the cell as crimped, and of the cell crimped with the stuffers' rest length also
-    lengthened by ``expansion`` (they buckle between the binders: crimp, slack)."""
+    lengthened by ``expansion`` (they buckle between the binders: crimp, slack); both at
+    s/d :data:`STUFFER_SPACING_RATIO`."""
     from fabmd.pipeline import run_crimp, run_test
 
     out = out / "stuffer"
@@ -375,7 +377,11 @@ def stage_stuffer(scene, out: Path, engine, expansion: float = STUFFER_EXPANSION
         crimp = protocols.setdefault("crimp", {})
         crimp["expansion"] = {**crimp.get("expansion", {}), **({"warp": extra} if extra else {})}
         protocols["tension"] = {**protocols.get("tension", {}), "coupon": STUFFER_COUPON}
-        variant = dataclasses.replace(scene, protocols=protocols)
+        # s/d below 1: the coupon's tension relief sets the longer stuffers' rest length to
+        # their length, which at s/d 1 would exceed the bead diameter (refused)
+        variant = dataclasses.replace(scene, protocols=protocols, discretisation=dataclasses.
+                                      replace(scene.discretisation,
+                                              spacing_ratio=STUFFER_SPACING_RATIO))
         if engine is not None:
             run_crimp(variant, out / name / "cell", engine=engine, overwrite=True, form="cell")
             run_test(variant, "tension", out / name / "tension", engine=engine, overwrite=True,
@@ -386,7 +392,8 @@ def stage_stuffer(scene, out: Path, engine, expansion: float = STUFFER_EXPANSION
         c = _curve(out / name / "tension" / "tension")
         x, f = c["elongation_pct"], c["force_per_width_n_m"]
         results[name] = {
-            "warp_expansion": extra, "cell_crimp_pct": cell["crimped"]["crimp_pct"],
+            "warp_expansion": extra, "spacing_ratio": STUFFER_SPACING_RATIO,
+            "cell_crimp_pct": cell["crimped"]["crimp_pct"],
             "beads": t["n_beads"], **lammps_cost(out / name),
             "force_at_elongation_n": t["force_at_elongation_n"],
             "tangent_stiffness_n_m_per_width": {
