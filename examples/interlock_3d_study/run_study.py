@@ -58,8 +58,9 @@ QUICK = {
                       "coupon": {"length_m": "20 mm", "width_m": "20 mm"}},
 }
 PIECE_CELLS = 6
-#: the interior of a piece: beads at least this far inside its edges [m]
-PIECE_EDGE_M = 0.024
+#: the interior of a piece: beads at least this fraction of its shorter side inside its
+#: edges (24 mm on the 6 x 6-cell piece)
+PIECE_EDGE_FRACTION = 0.2
 #: elongation ranges [%] of the tangent stiffness before and after the warp straightens
 SOFT_RANGE_PCT, STIFF_RANGE_PCT = (0.2, 1.0), (1.5, 3.0)
 #: the stuffer experiment: the stuffers' extra rest-length strain and the coupon
@@ -137,7 +138,8 @@ def piece_measures(model, cell: dict) -> dict:
     from fabmd.results.yarn_tension import yarn_tension
 
     whole = fabric_measures(model)
-    inner = fabric_measures(model, edge_m=PIECE_EDGE_M)
+    edge = PIECE_EDGE_FRACTION * float(np.ptp(model.unwrapped_positions[:, :2], axis=0).min())
+    inner = fabric_measures(model, edge_m=edge)
     ref_t = cell["thickness_m"]["crimped"]
     return {"beads": model.n_beads,
             "thickness_m": {"whole": whole["thickness_m"], "interior": inner["thickness_m"],
@@ -146,7 +148,7 @@ def piece_measures(model, cell: dict) -> dict:
                                       "interior": 100 * (inner["thickness_m"] / ref_t - 1)},
             "crimp_pct": {"whole": whole["crimp_pct"], "interior": inner["crimp_pct"],
                           "cell": cell["crimp_pct"]},
-            "interior_edge_m": PIECE_EDGE_M,
+            "interior_edge_m": edge,
             "yarn_tension_cn_per_tex": _families(yarn_tension(model), "cn_per_tex")}
 
 
