@@ -534,7 +534,7 @@ def table(results: dict) -> str:
                      f"{stiff:.3g} N/m per unit strain (× {r['stiffening_ratio']:.2f}); "
                      f"bilinear break "
                      f"{r['bilinear']['transition_elongation_pct']:.2f} %"
-                     + (f"; midplane max |z − mean| {_mm(m['max_deviation_m'])} mm of "
+                     + (f"; midplane max abs(z − mean) {_mm(m['max_deviation_m'])} mm of "
                         f"{_mm(m['mean_thickness_m'])} mm" if m else "")
                      + f"; quasi-static: {_qs(r['quasi_static'])}"])
     for key in ("frame", "frame-check"):
@@ -550,7 +550,7 @@ def table(results: dict) -> str:
                      f"{r['speed_fraction']:g}", _cost(r),
                      "F_norm " + ", ".join(f"{a}° {v:.3g}" for a, v in f.items()) + " N/m; "
                      f"locking angle {r['locking_angle_deg']:.1f}°"
-                     + (f"; midplane max |z − mean| {_mm(m['first']['max_deviation_m'])} → "
+                     + (f"; midplane max abs(z − mean) {_mm(m['first']['max_deviation_m'])} → "
                         f"{_mm(m['last']['max_deviation_m'])} mm, thickness "
                         f"{_mm(m['first']['mean_thickness_m'])} → "
                         f"{_mm(m['last']['mean_thickness_m'])} mm" if m else "")
