@@ -24,7 +24,7 @@ Stages (each a fabmd run folder under ``--out``; every one runs again with plain
               in-process one.
 
 ``--quick`` runs the same stages on a tiny setting (2 × 2-cell piece, 48 × 20 mm coupon,
-20 mm frame to 30°, loading 10 × faster) in a few minutes; the test uses it. The results
+20 mm frame to 30°, loading 10 × faster) in about a minute; the test uses it. The results
 go to ``<out>/study.json`` (the table of the README) and ``<out>/*.png``.
 
     python examples/interlock_3d_study/run_study.py --out runs/study3d [--np 1]
@@ -634,7 +634,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, required=True, help="results folder")
     p.add_argument("--np", type=int, default=1, dest="ranks",
                    help="MPI ranks (1: in-process; more: mpirun -np N lmp -in per stage)")
-    p.add_argument("--quick", action="store_true", help="the tiny setting (a few minutes)")
+    p.add_argument("--quick", action="store_true", help="the tiny setting (about a minute)")
     p.add_argument("--stages", default=None,
                    help=f"comma-separated, in order (default {','.join(STAGES)}; "
                         f"--quick adds mpirun; also: loose)")
