@@ -29,6 +29,12 @@ ON = AdaptiveLoading(adaptive=True, max_speed_factor=8)
     ({"max_speed_factor": 0.5}, "loading_speed.max_speed_factor must be"),
     ({"max_speed_factor": 500}, "loading_speed.max_speed_factor must be"),
     ({"target": 0.0}, "loading_speed.target must be"),
+    ({"target": 0.5}, "loading_speed.target must be"),
+    ({"min_speed_factor": 0.05}, "loading_speed.min_speed_factor must be"),
+    ({"min_speed_factor": 2.0}, "loading_speed.min_speed_factor must be"),
+    ({"max_speed_step": 1.0}, "loading_speed.max_speed_step must be"),
+    ({"max_kinetic_ratio": 0.5}, "loading_speed.max_kinetic_ratio must be"),
+    ({"start_fraction": 0.0}, "loading_speed.start_fraction must be"),
     ({"gain": 2.0}, "loading_speed.gain must be"),
     ({"control_interval": 0}, "loading_speed.control_interval must be"),
     ({"adaptive": "yes"}, "loading_speed.adaptive must be true or false"),
@@ -67,15 +73,20 @@ def test_the_plan_keeps_the_fixed_run_and_shortens_the_interval():
     assert adaptive_plan(fixed, AdaptiveLoading(), 1e-4) is fixed
     plan = adaptive_plan(fixed, ON, 1e-4)
     assert plan.every == 25 and plan.steps == 40_000 and plan.steps % plan.every == 0
-    # the base speed, smooth start, time step and drag are the fixed run's
-    assert (plan.speed_m_s, plan.ramp_time_s, plan.time_step_s, plan.gamma_kg_s) == \
-        (0.1, 4e-4, 1e-7, 1e-3)
+    # the base speed, time step and drag are the fixed run's; the smooth start a quarter
+    assert (plan.speed_m_s, plan.time_step_s, plan.gamma_kg_s) == (0.1, 1e-7, 1e-3)
+    assert plan.ramp_time_s == pytest.approx(1e-4)
     x = plan.extra
     assert x["fixed_speed_steps"] == 40_000 and x["fixed_speed_every"] == 200
     assert x["control_interval_steps"] == 100 and x["travel_m"] == 1e-4
     # the control interval spans at least control_transits wave transits of the specimen
     slow = adaptive_plan(fixed, ON, 1e-4, transit_s=1e-5)
-    assert slow.extra["control_interval_steps"] == 500  # 5 x 1e-5 s / 1e-7 s
+    assert slow.extra["control_interval_steps"] == 200  # 2 x 1e-5 s / 1e-7 s
+    # the output interval is at most OUTPUT_SPEEDUP times shorter; a run that may go below
+    # the base speed may take more steps than the fixed run
+    fast = adaptive_plan(fixed, dataclasses.replace(ON, max_speed_factor=32,
+                                                    min_speed_factor=0.5), 1e-4)
+    assert fast.every == 25 and fast.steps == 80_000
 
 
 def test_window_mean_averages_interval_means_over_the_travel():
@@ -101,6 +112,15 @@ def test_default_inputs_have_no_adaptive_commands_and_adaptive_ones_do():
                  "fix             adapt_smooth all controller 1",
                  "fix             adapt_end all halt", "*v_adapt_factor"):
         assert line in text, line
+    # the drag's share of the work (against a floor force times the current speed) and
+    # KE/U; ln(factor) moves by at most ln 2 up and ln 4 down per control interval (gain
+    # 0.5) and stays within [ln min, ln max]
+    assert 'adapt_drag equal "f_adapt_means[2]/v_adapt_work/0.05"' in text
+    assert "*v_adapt_factor,f_adapt_means[1]," in text
+    assert "ternary(v_adapt_raw<(-1.386294361),(-1.386294361),ternary(v_adapt_raw>" \
+        "2.772588722,2.772588722," in text
+    slower = Tension(loading_speed=dataclasses.replace(ON, min_speed_factor=0.5))
+    assert "v_adapt_ln<(-0.6931471806)" in slower.input_text(coupon)
     # the control runs after the outputs it reads (p_ext, p_damp, ke_free, ebond)
     assert text.index("variable        p_ext") < text.index("fix             adapt_means")
     assert text.index("variable        p_damp") < text.index("fix             adapt_means")
@@ -141,7 +161,8 @@ def test_straight_fibres_speed_up_and_keep_n_ea_epsilon(tmp_path):
     coupon = parallel_fibres(n=n)
     # at 4x the base speed the undamped straight fibres ring by +-3 % (the measures, energy
     # ratios, are quadratic in such a ripple): 2x keeps the closed form within 1 %
-    adaptive = _tension(loading_speed=dataclasses.replace(ON, max_speed_factor=2))
+    adaptive = _tension(loading_speed=dataclasses.replace(ON, max_speed_factor=2,
+                                                          min_speed_factor=0.5))
     result = adaptive.run(coupon, tmp_path / "a", engine=Engine(progress=False))
     s, c = result.summary, result.curve
     ea = SOFT_GLASS.modulus_pa * np.pi * 0.5e-3**2 / 4
