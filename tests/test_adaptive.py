@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fabmd.errors import InputError
+from fabmd.errors import InputError, QuasiStaticWarning
 from fabmd.protocols.picture_frame import PictureFrame
 from fabmd.protocols.tension import Tension
 from fabmd.scene.adaptive import AdaptiveLoading, adaptive_plan, window_mean
@@ -189,3 +189,44 @@ def test_straight_fibres_speed_up_and_keep_n_ea_epsilon(tmp_path):
                                                                backend="standalone"))
     assert again.summary["adaptive_loading"]["steps"] == run["steps"]
     assert np.abs(again.curve["force_n"] - force).max() < 2e-3 * force.max()
+
+
+def test_bias_extension_runs_the_adapted_speed_as_tension_does():
+    from fabmd.protocols.bias_extension import BiasExtension
+
+    from .test_bias_extension import braced_bias_net
+
+    net = braced_bias_net()
+    plain = BiasExtension().input_text(net)
+    assert "adapt" not in plain
+    test = BiasExtension(loading_speed=ON)
+    text = test.input_text(net)  # refuses a tension plan whose steps differ from its own
+    for line in ("fix             adapt_control all controller", "*v_adapt_factor",
+                 "variable        u equal \"0.5*((xcm(clamp_right,x)-"):
+        assert line in text, line
+    assert test.plan(net).extra["adaptive"] and test.plan(net).every < BiasExtension().plan(
+        net).every
+    with pytest.raises(InputError, match="bias_extension.loading_speed.max_speed_factor"):
+        BiasExtension(speed_fraction=1e-2, loading_speed=ON)
+
+
+@pytest.mark.lammps
+def test_a_drag_share_above_the_target_slows_the_speed_below_the_base(tmp_path):
+    """The event rule: where the drag takes more of the work than ``target`` the factor
+    falls, here to ``min_speed_factor`` (a drag on the absolute velocity, 1000 times the
+    default, takes most of the work of pulling straight fibres); quiet fibres (the test
+    above) speed up."""
+    from fabmd.engine import Engine
+
+    coupon = parallel_fibres(n=4)
+    test = _tension(drag="absolute", loading_speed=dataclasses.replace(
+        ON, max_speed_factor=2, min_speed_factor=0.5))
+    heavy = dataclasses.replace(test, damping_time_s=test.plan(coupon).duration_s / 1e4)
+    with pytest.warns(QuasiStaticWarning, match="damping_share"):  # the drag is flagged
+        result = heavy.run(coupon, tmp_path / "slow", engine=Engine(progress=False))
+    c = result.curve
+    speed = c["clamp_speed_m_s"] / heavy.plan(coupon).speed_m_s
+    late = c["time_s"] > 0.5 * c["time_s"][-1]
+    assert speed[late].max() < 0.75 and speed[-1] == pytest.approx(0.5, rel=0.05)
+    assert result.summary["adaptive_loading"]["step_ratio"] < 1.0  # more steps than fixed
+    assert c["elongation_pct"][-1] >= 1.2
