@@ -35,6 +35,7 @@ ON = AdaptiveLoading(adaptive=True, max_speed_factor=8)
     ({"max_speed_step": 1.0}, "loading_speed.max_speed_step must be"),
     ({"max_kinetic_ratio": 0.5}, "loading_speed.max_kinetic_ratio must be"),
     ({"start_fraction": 0.0}, "loading_speed.start_fraction must be"),
+    ({"floor_force_n": -1.0}, "loading_speed.floor_force_n must be"),
     ({"gain": 2.0}, "loading_speed.gain must be"),
     ({"control_interval": 0}, "loading_speed.control_interval must be"),
     ({"adaptive": "yes"}, "loading_speed.adaptive must be true or false"),
@@ -63,6 +64,9 @@ def test_scene_table_turns_it_on():
                                                         "max_speed_factor": 4}})
     assert test.loading_speed == AdaptiveLoading(adaptive=True, max_speed_factor=4)
     assert build_protocol("picture-frame", {}).loading_speed.adaptive is False
+    floor = build_protocol("tension", {"loading_speed": {"adaptive": True,
+                                                         "floor_force_n": "0.05 kN"}})
+    assert floor.loading_speed.floor_force_n == pytest.approx(50.0)
     with pytest.raises(InputError, match="has no key 'speed'"):
         build_protocol("tension", {"loading_speed": {"speed": 2}})
 
@@ -121,6 +125,12 @@ def test_default_inputs_have_no_adaptive_commands_and_adaptive_ones_do():
         "2.772588722,2.772588722," in text
     slower = Tension(loading_speed=dataclasses.replace(ON, min_speed_factor=0.5))
     assert "v_adapt_ln<(-0.6931471806)" in slower.input_text(coupon)
+    # a floor force the user sets: the work is taken at least as it times the speed
+    floored = Tension(loading_speed=dataclasses.replace(ON, floor_force_n=50.0))
+    line = next(t for t in floored.input_text(coupon).splitlines()
+                if t.startswith("variable        adapt_work"))
+    power = float(line.split(">")[1].split("*")[0])
+    assert power == pytest.approx(50.0 * floored.plan(coupon).speed_m_s, rel=1e-8)
     # the control runs after the outputs it reads (p_ext, p_damp, ke_free, ebond)
     assert text.index("variable        p_ext") < text.index("fix             adapt_means")
     assert text.index("variable        p_damp") < text.index("fix             adapt_means")

@@ -84,6 +84,9 @@ class AdaptiveLoading:
             (0, 0.1] (the per-interval verdict's limit is 0.1).
         start_fraction: the smooth start's length over the fixed-speed run's, in (0, 1]
             (its travel is spent at or below the base speed).
+        floor_force_n: the boundary force [N] below which the drag is weighed against this
+            force instead (> 0; default None: the protocol's, one fibre at a tenth of the
+            test's strain): about the smallest force whose error matters.
         control_interval: fewest output intervals per control interval (>= 1).
         control_transits: fewest axial wave transits of the specimen per control interval
             (>= 1): the measures of a shorter one answer the controller's own last
@@ -99,6 +102,7 @@ class AdaptiveLoading:
     max_speed_step: float = 2.0
     max_kinetic_ratio: float = 0.02
     start_fraction: float = 0.25
+    floor_force_n: float | None = None
     control_interval: int = 4
     control_transits: float = 2.0
 
@@ -116,6 +120,8 @@ class AdaptiveLoading:
                         INTERVAL_LIMITS["kinetic_to_strain_energy"], low_open=True)
         inputs.in_range("loading_speed.start_fraction", self.start_fraction, 0.0, 1.0,
                         low_open=True)
+        if self.floor_force_n is not None:
+            inputs.positive("loading_speed.floor_force_n", self.floor_force_n)
         inputs.positive_int("loading_speed.control_interval", self.control_interval)
         inputs.in_range("loading_speed.control_transits", self.control_transits, 1.0, 1000.0)
 
@@ -149,6 +155,7 @@ def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float,
              "target": loading.target, "gain": loading.gain,
              "max_speed_step": loading.max_speed_step,
              "max_kinetic_ratio": loading.max_kinetic_ratio,
+             "floor_force_n": loading.floor_force_n,
              "control_interval_steps": every * max(loading.control_interval, transits),
              "transit_s": transit_s,
              "travel_m": travel_m, "fixed_speed_steps": plan.steps,
@@ -168,7 +175,9 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
     Args:
         energy_floor_j: strain energy below which KE/U is taken against this floor (a
             slack fabric has almost none).
-        power_floor_w: boundary power below which the work shares are taken against it.
+        power_floor_w: boundary power at the base speed below which the work shares are
+            taken against it (times the speed factor); ``floor_force_n`` × the base speed
+            where the loading sets it.
         displacement: the variable (without ``v_``) of the boundary's travel [m].
     """
     x = plan.extra
@@ -177,6 +186,8 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
     # the means sampled every 10 steps where that divides a long interval (as the outputs')
     sample = 10 if interval >= 200 and interval % 10 == 0 else 1
     ln_up = math.log(x.get("max_speed_step", 1.5))
+    if x.get("floor_force_n"):
+        power_floor_w = x["floor_force_n"] * plan.speed_m_s
     return render("adaptive_speed", interval=interval, every=plan.every,
                   ln_max=math.log(x["max_speed_factor"]), max_factor=x["max_speed_factor"],
                   ln_min=math.log(x.get("min_speed_factor", 1.0)),
