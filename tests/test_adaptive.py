@@ -119,7 +119,9 @@ def test_default_inputs_have_no_adaptive_commands_and_adaptive_ones_do():
     # the drag's share of the work (against a floor force times the current speed) and
     # KE/U; ln(factor) moves by at most ln 2 up and ln 4 down per control interval (gain
     # 0.5) and stays within [ln min, ln max]
-    assert 'adapt_drag equal "f_adapt_means[2]/v_adapt_work/0.05"' in text
+    assert 'adapt_drag_now equal "f_adapt_means[2]/v_adapt_work"' in text
+    assert "v_adapt_drag_now ave window " in text  # its mean over the drag time
+    assert "f_adapt_memory)/0.05" in text
     assert "*v_adapt_factor,f_adapt_means[1]," in text
     assert "ternary(v_adapt_raw<(-1.386294361),(-1.386294361),ternary(v_adapt_raw>" \
         "2.772588722,2.772588722," in text
