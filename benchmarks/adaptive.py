@@ -19,11 +19,16 @@ curve (above a fifth of its range, relative to the reference curve's largest val
 the quasi-static verdict; per fixed speed the largest report difference to the run at
 half of it.
 
-    python benchmarks/adaptive.py [--tests tension picture-frame] [--fast]
-                                  [--speeds 1 0.5 0.25] [--variants max_speed_factor=16,target=0.05]
+    python benchmarks/adaptive.py [--tests tension picture-frame bias-extension] [--fast]
+                                  [--speeds 4 2 1] [--variants max_speed_factor=32,...]
                                   [--write] [--out DIR] [--reuse]
 
-``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--out`` keeps the
+Report points: tension force at 4/5/6 % (to the example's 6 %; ``--fast``: to 8 %, at
+6/7/8 %, past that coupon's longer toe), picture frame F_norm at 10/20/30/40° (the issue's
+2 x 2-cell coupon), bias extension force at 10/20/30° (closed-form central angle).
+``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--write`` replaces
+the RESULTS section with this invocation's table (the section shipped holds two
+invocations' tables and their reading, written by hand). ``--out`` keeps the
 run folders; with ``--reuse`` a run whose folder already holds ``bench.json`` (written by
 this script after the run) is read back instead of run again.
 """
