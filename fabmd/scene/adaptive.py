@@ -11,7 +11,7 @@ near it, where it is not the run goes faster.
 
 * every control interval (``control_interval`` output intervals, at least
   ``control_transits`` wave transits of the specimen) ``fix ave/time`` averages the power
-  the boundary puts in, the drag's power and the kinetic power of the free beads (d KE/dt);
+  the boundary puts in and the drag's power;
 * the event signal is the **drag's share of the work** in the interval: at a given drag it
   is linear in the speed (the drag force of the non-affine motion grows with the speed, its
   power with its square, the boundary's power with the speed) and about the share of the
@@ -23,8 +23,9 @@ near it, where it is not the run goes faster.
   about τ has passed (measured: without this memory the 7-fibre tension sped up at the
   end of its toe and its force at 4 % came out 10 % high). KE/U (of the per-interval
   verdict, :data:`fabmd.scene.quasi_static.INTERVAL_LIMITS`) is kept under
-  ``max_kinetic_ratio``; the kinetic energy's share of the work is not used (in an adaptive run it
-  is mostly the controller's own speed changes: the fabric moving with the boundary);
+  ``max_kinetic_ratio``; the kinetic energy's share of the work is not used (in an
+  adaptive run it is mostly the controller's own speed changes: the fabric moving with the
+  boundary);
 * ``busy`` is the largest of them over what it may be; an integral controller (``fix
   controller``) moves ln f by ``-gain·ln(busy)`` each interval, at most by
   ln ``max_speed_step`` up and twice that down (a ramp limit: a short control interval and
@@ -189,18 +190,17 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
     gain = x["gain"]
     # the means sampled every 10 steps where that divides a long interval (as the outputs')
     sample = 10 if interval >= 200 and interval % 10 == 0 else 1
-    ln_up = math.log(x.get("max_speed_step", 1.5))
+    ln_up = math.log(x["max_speed_step"])
     if x.get("floor_force_n"):
         power_floor_w = x["floor_force_n"] * plan.speed_m_s
     memory = max(1, math.ceil(plan.damping_time_s / (interval * plan.time_step_s) - 1e-9))
     return render("adaptive_speed", interval=interval, every=plan.every, memory=memory,
                   ln_max=math.log(x["max_speed_factor"]), max_factor=x["max_speed_factor"],
-                  ln_min=math.log(x.get("min_speed_factor", 1.0)),
-                  min_factor=x.get("min_speed_factor", 1.0),
+                  ln_min=math.log(x["min_speed_factor"]), min_factor=x["min_speed_factor"],
                   sample_every=sample, samples=interval // sample,
                   external_ref=external_ref, power_floor=power_floor_w,
                   energy_floor=energy_floor_j,
-                  kinetic_limit=x.get("max_kinetic_ratio", 0.05),
+                  kinetic_limit=x["max_kinetic_ratio"],
                   target=x["target"], ramp_time=plan.ramp_time_s, gain=gain,
                   ln_up=f"{ln_up:.4g}", ln_down=f"{2 * ln_up:.4g}",
                   step_up=-ln_up / gain, step_down=2 * ln_up / gain,
@@ -222,6 +222,7 @@ def adaptive_summary(plan: RunPlan, steps, time_s, speed_m_s) -> dict:
         "steps": taken, "fixed_speed_steps": plan.extra["fixed_speed_steps"],
         "step_ratio": plan.extra["fixed_speed_steps"] / max(taken, 1),
         "max_speed_factor": float(factor.max()),
+        "min_speed_factor_after_start": float(factor[after].min()) if after.any() else None,
         "mean_speed_factor_after_start": float(factor[after].mean()) if after.any() else None,
         "allowed_speed_factor": plan.extra["max_speed_factor"],
         "note": "speed factor: boundary speed over the base speed (speed_fraction x wave "
