@@ -1,24 +1,44 @@
-"""Adaptive loading benchmark: steps, wall time and curve difference against the fixed speed.
+"""Adaptive loading benchmark: steps, wall time and curve difference against a fixed speed
+that is itself converged in speed.
 
 For each test, crimps the periodic cell of ``examples/plain_weave.toml`` once, cuts and
-relaxes the test's coupon once, then runs the test at the fixed base speed (the scene's
-``speed_fraction``) and with adaptive loading (``loading_speed = { adaptive = true, ... }``,
-:mod:`fabmd.scene.adaptive`) for each variant ``max_speed_factor:target``, all in this
-process, one after another. Prints per run: loading steps, wall time (the test stage only),
-their ratios to the fixed run's, the largest relative difference of the report values
-(tension: force at 1/2/3 % elongation; picture frame: normalised force at 10/20/30/40°)
-against the fixed run's, the largest difference over the whole curve (above a fifth of
-its range, relative to the fixed curve's largest value) and the quasi-static verdict.
+relaxes the test's coupon once, then
 
-    python benchmarks/adaptive.py [--tests tension picture-frame] [--variants 8:0.25 4:0.25]
-                                  [--fast] [--write] [--out DIR]
-``--fast``: the picture frame's coupon with 1 fibre per yarn (7 are too slow here).
+1. **reference**: runs the test at fixed speeds, the scene's ``speed_fraction`` times each
+   of ``--speeds`` (halvings), and takes as the reference the fastest speed whose run agrees
+   with the run at half of it within ``--converged`` (1 %) at every report point: the speed a
+   user needs for a trusted fixed-speed curve;
+2. **adaptive**: runs the test with ``loading_speed = { adaptive = true, ... }``
+   (:mod:`fabmd.scene.adaptive`) at that reference speed as its base, for each variant
+   ``key=value,...`` of :class:`~fabmd.scene.adaptive.AdaptiveLoading`,
+
+all in this process, one run after another. Prints per run: loading steps, wall time (the
+test stage only), their ratios to the reference run's, the largest relative difference of
+the report values against the reference run's, the largest difference over the whole
+curve (above a fifth of its range, relative to the reference curve's largest value) and
+the quasi-static verdict; per fixed speed the largest report difference to the run at
+half of it.
+
+    python benchmarks/adaptive.py [--tests tension picture-frame bias-extension] [--fast]
+                                  [--speeds 4 2 1] [--variants max_speed_factor=32,...]
+                                  [--write] [--out DIR] [--reuse]
+
+Report points: tension force at 4/5/6 % (to the example's 6 %; ``--fast``: to 8 %, at
+6/7/8 %, past that coupon's longer toe), picture frame F_norm at 10/20/30/40° (the issue's
+2 x 2-cell coupon), bias extension force at 10/20/30° (closed-form central angle).
+``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--write`` replaces
+the RESULTS section with this invocation's table (the section shipped holds two
+invocations' tables and their reading, written by hand). ``--out`` keeps the
+run folders; with ``--reuse`` a run whose folder already holds ``bench.json`` (written by
+this script after the run) is read back instead of run again.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
+import os
 import sys
 import tempfile
 import time
@@ -32,17 +52,23 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _results import table, update_section  # noqa: E402
 
 from fabmd.engine import Engine  # noqa: E402
+from fabmd.model.bead_model import BeadModel  # noqa: E402
 from fabmd.pipeline import coupon_stage, crimp_stage, periodic_cell, protocol_stage  # noqa: E402
 from fabmd.results.curves import curve_difference  # noqa: E402
-from fabmd.scene.adaptive import AdaptiveLoading  # noqa: E402
+from fabmd.scene.adaptive import MAX_SPEED_FRACTION, AdaptiveLoading  # noqa: E402
 from fabmd.scene.outputs import TrajectoryOutput  # noqa: E402
 from fabmd.scenefile import load_scene  # noqa: E402
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "plain_weave.toml"
 #: test -> (x column, y column, report x values, what they are)
-REPORT = {"tension": ("elongation_pct", "force_n", (1.0, 2.0, 3.0), "force at 1/2/3 %"),
+REPORT = {"tension": ("elongation_pct", "force_n", (4.0, 5.0, 6.0), "force at 4/5/6 %"),
           "picture-frame": ("shear_angle_deg", "normalised_force_n_m", (10.0, 20.0, 30.0, 40.0),
-                            "F_norm at 10/20/30/40°")}
+                            "F_norm at 10/20/30/40°"),
+          "bias-extension": ("shear_angle_deg", "force_n", (10.0, 20.0, 30.0),
+                             "force at a central shear angle (closed form) of 10/20/30°")}
+#: with ``--fast`` (1 fibre per yarn) the tension goes to 8 %, past that coupon's longer
+#: toe (about 5 %; RESULTS "Tension coupon length"), and reports at 6/7/8 %
+FAST_TENSION = ({"max_elongation_pct": 8.0}, (6.0, 7.0, 8.0), "force at 6/7/8 %")
 
 
 def fast_scene(scene):
@@ -53,27 +79,47 @@ def fast_scene(scene):
     return dataclasses.replace(scene, fabric=dataclasses.replace(scene.fabric, **specs))
 
 
-def prepared_coupon(scene, test: str, root: Path, engine: Engine):
-    """The test's coupon of the example, cut from the crimped periodic cell and relaxed."""
+def prepared_coupon(scene, test: str, root: Path, engine: Engine, reuse: bool) -> BeadModel:
+    """The test's coupon of the example, cut from the crimped periodic cell and relaxed
+    (read back from ``root/coupon.data`` with ``reuse``)."""
+    saved = root / "coupon.data"
+    if reuse and saved.is_file():
+        return BeadModel.load(saved)
     crimped = crimp_stage(scene).run(periodic_cell(scene), root / "crimp", engine=engine,
                                      overwrite=True).model
     coupon, _ = coupon_stage(scene, test)
     if test == "picture-frame":  # the issue's 2 x 2-cell coupon
         cell = scene.fabric.unit_cell_m
         coupon = dataclasses.replace(coupon, length_m=2 * cell[0], width_m=2 * cell[1])
-    return coupon.run(crimped, root / f"coupon-{test}", engine=engine, overwrite=True).model
+    model = coupon.run(crimped, root / f"coupon-{test}", engine=engine, overwrite=True).model
+    model.save(root, "coupon")
+    return model
 
 
-def report_values(curve: dict, test: str) -> list[float | None]:
-    """The report values, read off the curve (a point a hair past the curve's end, as the
-    fixed run's last sample can be, is read at the end)."""
-    xc, yc, xs, _ = REPORT[test]
+def report_points(test: str, fast: bool) -> tuple[tuple[float, ...], str]:
+    """The report x values of a test and what they are."""
+    if fast and test == "tension":
+        return FAST_TENSION[1], FAST_TENSION[2]
+    return REPORT[test][2], REPORT[test][3]
+
+
+def report_values(curve: dict, test: str, xs) -> list[float | None]:
+    """The report values at ``xs``, read off the curve (a point a hair past the curve's
+    end, as the fixed run's last sample can be, is read at the end)."""
+    xc, yc, _, _ = REPORT[test]
     x, y = np.asarray(curve[xc], float), np.asarray(curve[yc], float)
     top = float(x.max())
     return [float(np.interp(min(v, top), x, y)) if v <= top * 1.005 else None for v in xs]
 
 
-def run_one(test_obj, coupon, out: Path, engine: Engine, test: str) -> dict:
+def run_one(test_obj, coupon, out: Path, engine: Engine, test: str, reuse: bool,
+            xs) -> dict:
+    """One run (or its ``bench.json`` with ``reuse``): steps, wall, curve, report values."""
+    saved = out / "bench.json"
+    if reuse and saved.is_file():
+        run = json.loads(saved.read_text())
+        run["curve"] = {k: np.asarray(v) for k, v in run["curve"].items()}
+        return run
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the verdict is reported in the table
@@ -81,70 +127,134 @@ def run_one(test_obj, coupon, out: Path, engine: Engine, test: str) -> dict:
     wall = time.perf_counter() - t0
     s = result.summary
     adaptive = s.get("adaptive_loading")
-    return {"steps": adaptive["steps"] if adaptive else s["steps"], "wall_s": wall,
-            "curve": result.curve, "values": report_values(result.curve, test),
-            "mean_factor": adaptive["mean_speed_factor_after_start"] if adaptive else 1.0,
-            "ok": s["quasi_static"]["ok"], "beads": s["n_beads"]}
-
-
-def compare(test: str, scene, coupon, variants: list[tuple[float, float]], root: Path,
-            engine: Engine) -> list[list]:
-    base = protocol_stage(scene, test)
-    base = dataclasses.replace(base, trajectory=TrajectoryOutput(frames=0))
-    fixed = run_one(base, coupon, root / f"{test}-fixed", engine, test)
     xc, yc, _, _ = REPORT[test]
-    rows = [[test, "fixed", fixed["beads"], fixed["steps"], 1.0, fixed["wall_s"], 1.0,
-             1.0, " / ".join(f"{v:.4g}" for v in fixed["values"] if v is not None), "-", "-",
-             "yes" if fixed["ok"] else "no"]]
-    print(rows[-1], flush=True)
-    for k, target in variants:
-        test_obj = dataclasses.replace(base, loading_speed=AdaptiveLoading(
-            adaptive=True, max_speed_factor=k, target=target))
-        run = run_one(test_obj, coupon, root / f"{test}-adaptive-{k:g}-{target:g}", engine,
-                      test)
-        diffs = [abs(a / f - 1) for a, f in zip(run["values"], fixed["values"], strict=True)
-                 if a is not None and f]
-        whole = curve_difference(fixed["curve"][xc], fixed["curve"][yc], run["curve"][xc],
+    keep = [xc, yc] + [c for c in ("clamp_speed_m_s", "corner_speed_m_s")
+                       if c in result.curve]
+    run = {"steps": adaptive["steps"] if adaptive else s["steps"], "wall_s": wall,
+           "curve": {c: np.asarray(result.curve[c]).tolist() for c in keep},
+           "values": report_values(result.curve, test, xs),
+           "mean_factor": adaptive["mean_speed_factor_after_start"] if adaptive else 1.0,
+           "ok": s["quasi_static"]["ok"], "beads": s["n_beads"],
+           "load": os.getloadavg()[0]}
+    saved.write_text(json.dumps(run))
+    run["curve"] = {k: np.asarray(v) for k, v in run["curve"].items()}
+    return run
+
+
+def report_diff(run: dict, ref: dict) -> float | None:
+    """Largest relative difference of the report values (None: none comparable)."""
+    diffs = [abs(a / f - 1) for a, f in zip(run["values"], ref["values"], strict=True)
+             if a is not None and f]
+    return max(diffs) if diffs else None
+
+
+def pct(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.2f} %"
+
+
+def values_text(run: dict) -> str:
+    return " / ".join(f"{v:.4g}" for v in run["values"] if v is not None)
+
+
+def reference(test: str, base, coupon, speeds: list[float], converged: float, root: Path,
+              engine: Engine, reuse: bool, xs) -> tuple[float, dict, list[list]]:
+    """Fixed runs at ``speed_fraction`` × each of ``speeds`` (descending): the reference
+    speed (the fastest whose run agrees with the next, half as fast, within ``converged``
+    at the report points; else the slowest), its run, and the table rows."""
+    runs = []
+    for factor in speeds:
+        sf = base.speed_fraction * factor
+        obj = dataclasses.replace(base, speed_fraction=sf)
+        runs.append((sf, run_one(obj, coupon, root / f"{test}-fixed-{sf:g}", engine, test,
+                                 reuse, xs)))
+        print(test, f"fixed {sf:g}", runs[-1][1]["steps"], f"{runs[-1][1]['wall_s']:.0f} s",
+              values_text(runs[-1][1]), flush=True)
+    chosen = len(runs) - 1
+    for i in range(len(runs) - 1):
+        d = report_diff(runs[i][1], runs[i + 1][1])
+        if d is not None and d <= converged:
+            chosen = i
+            break
+    rows = []
+    for i, (sf, run) in enumerate(runs):
+        half = report_diff(run, runs[i + 1][1]) if i + 1 < len(runs) else None
+        mark = " (reference)" if i == chosen else ""
+        rows.append([test, f"fixed {sf:g}{mark}", run["beads"], run["steps"], "-",
+                     run["wall_s"], "-", 1.0, values_text(run), pct(half), "-", "-",
+                     "yes" if run["ok"] else "no"])
+    return runs[chosen][0], runs[chosen][1], rows
+
+
+def compare(test: str, scene, coupon, speeds, converged, variants, root: Path,
+            engine: Engine, reuse: bool, fast: bool) -> list[list]:
+    base = protocol_stage(scene, test)
+    base = dataclasses.replace(base, trajectory=TrajectoryOutput(frames=0),
+                               **(FAST_TENSION[0] if fast and test == "tension" else {}))
+    xs = report_points(test, fast)[0]
+    sf, ref, rows = reference(test, base, coupon, speeds, converged, root, engine, reuse, xs)
+    xc, yc, _, _ = REPORT[test]
+    for settings in variants:
+        k = min(settings.get("max_speed_factor", 8.0),
+                round(MAX_SPEED_FRACTION / sf, 6))  # the fastest any test may load
+        loading = AdaptiveLoading(adaptive=True, **{**settings, "max_speed_factor": k})
+        test_obj = dataclasses.replace(base, speed_fraction=sf, loading_speed=loading)
+        name = ",".join(f"{key}={value:g}" for key, value in settings.items())
+        run = run_one(test_obj, coupon, root / f"{test}-adaptive-{sf:g}-{name}", engine,
+                      test, reuse, xs)
+        whole = curve_difference(ref["curve"][xc], ref["curve"][yc], run["curve"][xc],
                                  run["curve"][yc])
-        rows.append([test, f"adaptive {k:g}x, target {target:g}", run["beads"], run["steps"],
-                     fixed["steps"] / run["steps"], run["wall_s"],
-                     fixed["wall_s"] / run["wall_s"], run["mean_factor"],
-                     " / ".join(f"{v:.4g}" for v in run["values"] if v is not None),
-                     f"{100 * max(diffs):.2f} %" if diffs else "-", f"{100 * whole:.2f} %",
+        rows.append([test, f"adaptive on {sf:g}, {k:g}x" + "".join(
+                         f", {key} {value:g}" for key, value in settings.items()
+                         if key != "max_speed_factor"),
+                     run["beads"], run["steps"], ref["steps"] / run["steps"], run["wall_s"],
+                     ref["wall_s"] / run["wall_s"], run["mean_factor"], values_text(run),
+                     "-", pct(report_diff(run, ref)), pct(whole),
                      "yes" if run["ok"] else "no"])
         print(rows[-1], flush=True)
     return rows
+
+
+def variant(text: str) -> dict[str, float]:
+    """``key=value,...`` of :class:`~fabmd.scene.adaptive.AdaptiveLoading` (numbers)."""
+    return {key: float(value) for key, value in
+            (item.split("=") for item in text.split(",") if item)}
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--tests", nargs="+", default=["tension", "picture-frame"],
                    choices=sorted(REPORT))
-    p.add_argument("--variants", nargs="+", default=["8:0.25", "4:0.25"],
-                   help="max_speed_factor:target of each adaptive run")
-    p.add_argument("--fast", action="store_true",
-                   help="the picture frame with 1 fibre per yarn")
+    p.add_argument("--speeds", nargs="+", type=float, default=[1.0, 0.5, 0.25],
+                   help="fixed speeds over the scene's speed_fraction, fastest first")
+    p.add_argument("--converged", type=float, default=0.01,
+                   help="largest report difference to half the speed of a converged speed")
+    p.add_argument("--variants", nargs="*", default=["max_speed_factor=16"],
+                   help="key=value,... of AdaptiveLoading for each adaptive run")
+    p.add_argument("--fast", action="store_true", help="coupons with 1 fibre per yarn")
     p.add_argument("--out", type=Path, default=None, help="keep the run folders here")
+    p.add_argument("--reuse", action="store_true",
+                   help="read back runs whose folder under --out holds bench.json")
     p.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
     p.add_argument("--section", default="Adaptive loading")
     args = p.parse_args(argv)
-    variants = [tuple(float(v) for v in text.split(":")) for text in args.variants]
+    variants = [variant(text) for text in args.variants]
     root = args.out or Path(tempfile.mkdtemp(prefix="adaptive-bench-"))
     engine = Engine(progress=False)
     rows = []
     for test in args.tests:
         scene = load_scene(SCENE)
-        if args.fast and test == "picture-frame":
+        if args.fast:
             scene = fast_scene(scene)
-        coupon = prepared_coupon(scene, test, root / test, engine)
-        rows += compare(test, scene, coupon, variants, root, engine)
+        coupon = prepared_coupon(scene, test, root / test, engine, args.reuse)
+        rows += compare(test, scene, coupon, args.speeds, args.converged, variants, root,
+                        engine, args.reuse, args.fast)
     header = ["test", "loading", "beads", "steps", "fewer steps", "wall [s]", "faster",
-              "mean speed factor", "report values", "largest report diff",
-              "whole-curve diff", "quasi-static"]
+              "mean speed factor", "report values", "diff to half speed",
+              "largest report diff", "whole-curve diff", "quasi-static"]
     body = table(header, rows)
     print(body)
     if args.write:
-        notes = "\n".join(f"- {t}: {REPORT[t][3]}" for t in args.tests)
+        notes = "\n".join(f"- {t}: {report_points(t, args.fast)[1]}" for t in args.tests)
         command = "python benchmarks/adaptive.py " + " ".join(argv or sys.argv[1:])
         update_section(args.section, body + "\n\nReport values:\n" + notes, command)
     return 0

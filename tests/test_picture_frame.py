@@ -101,9 +101,12 @@ def test_bad_frames_are_refused():
 # -- LAMMPS runs ---------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def as_woven(tmp_path_factory):
+    return woven_square(tmp_path_factory.mktemp("pf"))
+
+
+def woven_square(root):
     """A 6 mm square cut from a crimped plain weave, clamped as woven (not relaxed free:
     the frame's clamps hold the fibres' crimp tension)."""
-    root = tmp_path_factory.mktemp("pf")
     engine = Engine(progress=False)
     crimped = Crimp(expansion={"warp": -0.02, "weft": -0.02}).run(
         plain_weave_cell(spacing_m=1e-3, gap=1.0), root / "crimp", engine=engine)

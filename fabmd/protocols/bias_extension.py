@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +37,9 @@ from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, values_at
 from ..results.fibre_angles import fibre_shear_angles
+from ..scene.adaptive import AdaptiveLoading, adaptive_summary, window_mean, window_width_m
 from ..scene.energy import ContactPower
+from ..scene.plan import RunPlan
 from .driven import ClampedTest, DrivenResult
 from .driven_outputs import energy_columns, read_outputs
 from .end_clamps import EndClampedTest
@@ -76,6 +78,8 @@ class BiasExtension(EndClampedTest):
         central_zone_fraction: half-size of the central square where fibre angles are
             measured, over the width W, in (0, 0.5].
         report_angles_deg: central shear angles at which forces are reported.
+        loading_speed: adaptive clamp speed (opt-in, :mod:`fabmd.scene.adaptive`; run as the
+            tension protocol runs it); the speed history is the curve's ``clamp_speed_m_s``.
 
     The default ``speed_fraction`` (1e-4) suits it: a mechanism with small forces needs a
     slower pull than a tension test; on the example coupon 1e-3, 5e-4 and 2e-4 fail the
@@ -92,11 +96,16 @@ class BiasExtension(EndClampedTest):
     max_displacement_m: float | None = None
     central_zone_fraction: float = 0.2
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
+    loading_speed: AdaptiveLoading = field(default_factory=AdaptiveLoading)
 
     def check_fields(self) -> None:
         inputs.in_range("bias_extension.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
                         low_open=True)
         self.check_positive_or_none("max_displacement_m")
+        if not isinstance(self.loading_speed, AdaptiveLoading):
+            raise InputError(f"bias_extension.loading_speed must be an AdaptiveLoading, got "
+                             f"{self.loading_speed!r}")
+        self.loading_speed.check_speed("bias_extension", self.speed_fraction)
         super().check_fields()
         inputs.in_range("bias_extension.central_zone_fraction", self.central_zone_fraction,
                         0, 0.5, low_open=True)
@@ -129,7 +138,11 @@ class BiasExtension(EndClampedTest):
             self.default_clamp_length_m(model, float(x.max() - x.min()))
         return Tension(max_elongation_pct=100 * self.max_displacement(model)
                        / self.free_length_m(model), clamp_length_m=clamp,
-                       gauge_fraction=None, **shared)
+                       gauge_fraction=None, loading_speed=self.loading_speed, **shared)
+
+    def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
+        """Adaptive loading as the tension protocol plans it (same travel and coupon)."""
+        return self.tension(model).plan_loading(plan, model)
 
     def prepare(self, model: BeadModel) -> BeadModel:
         """Check the coupon: H ≥ 2 W, yarns at ±45° to x, shear angle reachable."""
@@ -171,11 +184,17 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
     out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
     h, w = test.free_length_m(model), test.width_m(model)
     d = 2 * out["clamp_displacement_m"]
+    window = window_width_m(plan)
+    if window is not None:  # adaptive: the clamp forces over the fixed run's interval travel
+        for name in ("force_left_n", "force_right_n"):
+            out.columns[name] = window_mean(out["clamp_displacement_m"], out[name], window)
     force = 0.5 * (out["force_left_n"] - out["force_right_n"])
     gamma = bias_shear_angle_deg(d, h, w)
     curve = {"time_s": out["time_s"], "displacement_m": d, "force_n": force,
              "force_per_width_n_m": force / w, "shear_angle_deg": gamma,
              **energy_columns(out)}
+    if "clamp_speed_m_s" in out.columns:  # adaptive loading: the speed history
+        curve["clamp_speed_m_s"] = out["clamp_speed_m_s"]
     dmax = test.max_displacement(model)
     fit = bilinear_fit(d, force)
     p = model.positions
@@ -193,6 +212,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
         "clamp_speed_m_s": plan.loading.speed_m_s,
+        **adaptive_summary(plan, out["step"], out["time_s"], out.columns.get("clamp_speed_m_s")),
         "max_displacement_m": dmax,
         "max_shear_angle_deg": float(gamma.max()),
         "initial_stiffness_n_m": fit["initial_slope"],  # force per displacement

@@ -361,10 +361,14 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
     d = out["displacement_m"]
     gamma = shear_angle_from_displacement_deg(d, g.frame_length_m)
-    force = interval_force(d, out.external_work_j)
     window = window_width_m(plan)
-    if window is not None:  # adaptive: the force over the fixed run's interval travel
-        force = window_mean(d, force, window)
+    if window is None:
+        force = interval_force(d, out.external_work_j)
+    else:  # adaptive: less the work that sped the fabric up or was given back as it slowed
+        # (the fabric moves with the frame, its kinetic energy grows with the speed
+        # squared), averaged over the fixed run's interval travel
+        force = window_mean(d, interval_force(d, out.external_work_j - out["kinetic_j"]),
+                            window)
     fs = shear_force_n(force, d, g.frame_length_m)
     fnorm = normalised_shear_force_n_m(fs, g.frame_length_m, g.fabric_length_m)
     curve = {"time_s": out["time_s"], "displacement_m": d, "shear_angle_deg": gamma,
