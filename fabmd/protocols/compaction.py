@@ -252,8 +252,7 @@ class Compaction:
         area = self.area_m2(model)
         model_lo, model_hi = self.platens(model)
         lo, hi = settled_platens(run_dir, (model_lo, model_hi))
-        turn_steps = int(float((run_dir / "turn.txt").read_text().split()[-1]))
-        reached = turn_steps < plan.steps
+        reached = int(float((run_dir / "turn.txt").read_text().split()[-1])) < plan.steps
         # work done on the fabric by the top platen, −∫F dz (trapezoid over the means)
         work = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * area
                                                 * -np.diff(h))])
@@ -262,10 +261,7 @@ class Compaction:
         # the compaction curve: the loading branch from where the load goes through the
         # fabric for good (both platens carry it, within a factor 2), so that a loose fabric
         # rattling between the platens first is left out
-        pbl = pb[loading]
-        through = (pl > 0.0) & (pbl > 0.5 * pl) & (pbl < 2.0 * pl)
-        broken = np.nonzero(~through)[0]
-        first = int(broken[-1]) + 1 if broken.size else 0
+        first = first_contact(pl, pb[loading])
         pc, hc = pl[first:], hl[first:]
         order = np.argsort(pc, kind="stable")
         rises = np.diff(hc[order])
@@ -320,6 +316,14 @@ class Compaction:
                 f"max_travel_fraction or lower max_pressure_pa")
         return DrivenResult(run_dir, curve, summary, [curve_plot(p, h, loading, summary,
                                                                  bool(problems))])
+
+
+def first_contact(p: np.ndarray, pb: np.ndarray) -> int:
+    """Index of the loading sample from which both platens carry the load for good (the
+    bottom pressure within a factor 2 of the top's, ``p``/``pb`` [Pa])."""
+    through = (p > 0.0) & (pb > 0.5 * p) & (pb < 2.0 * p)
+    broken = np.nonzero(~through)[0]
+    return int(broken[-1]) + 1 if broken.size else 0
 
 
 def mismatch_at(p: np.ndarray, pb: np.ndarray, targets: tuple[float, ...], limit: float,

@@ -353,6 +353,16 @@ def interval_force(displacement: np.ndarray, work: np.ndarray) -> np.ndarray:
     return force
 
 
+def frame_force_n(d: np.ndarray, out, window: float | None) -> np.ndarray:
+    """Frame force [N] per output interval from the work the frame did over its travel
+    ``d`` [m]. Adaptive loading (``window``: the fixed run's interval travel [m]): less the
+    work that sped the fabric up or was given back as it slowed (the fabric moves with the
+    frame, its kinetic energy grows with the speed squared), averaged over that travel."""
+    if window is None:
+        return interval_force(d, out.external_work_j)
+    return window_mean(d, interval_force(d, out.external_work_j - out["kinetic_j"]), window)
+
+
 def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
            monitor: ContactPower | None = None) -> DrivenResult:
     """Curve (shear angle, frame force, F_s, F_norm), locking angle and the evidence."""
@@ -361,14 +371,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
     d = out["displacement_m"]
     gamma = shear_angle_from_displacement_deg(d, g.frame_length_m)
-    window = window_width_m(plan)
-    if window is None:
-        force = interval_force(d, out.external_work_j)
-    else:  # adaptive: less the work that sped the fabric up or was given back as it slowed
-        # (the fabric moves with the frame, its kinetic energy grows with the speed
-        # squared), averaged over the fixed run's interval travel
-        force = window_mean(d, interval_force(d, out.external_work_j - out["kinetic_j"]),
-                            window)
+    force = frame_force_n(d, out, window_width_m(plan))
     fs = shear_force_n(force, d, g.frame_length_m)
     fnorm = normalised_shear_force_n_m(fs, g.frame_length_m, g.fabric_length_m)
     curve = {"time_s": out["time_s"], "displacement_m": d, "shear_angle_deg": gamma,
