@@ -97,13 +97,17 @@ def test_silent_continue_halt_is_warned_about(tmp_path):
 def test_halt_on_a_chunk_end_stops_every_mpi_rank(tmp_path, mpirun):
     # the log (rank 0) tells the halt; every rank must skip the rest of the run alike
     write_input(tmp_path / "r", 20)
-    code = ("import sys; from fabmd.engine.inprocess import run_inprocess; "
-            "print('done', run_inprocess(sys.argv[1], 'in.halt', monitor=lambda lmp: None, "
-            "monitor_every=20))")
+    # each rank writes its own file (two ranks' prints interleave on mpirun's stdout)
+    code = ("import sys, pathlib; from fabmd.engine import mpi; "
+            "from fabmd.engine.inprocess import run_inprocess; "
+            "done = run_inprocess(sys.argv[1], 'in.halt', monitor=lambda lmp: None, "
+            "monitor_every=20); "
+            "pathlib.Path(sys.argv[1], f'done.{mpi.rank()}').write_text(str(done))")
     out = subprocess.run([str(mpirun), "-np", "2", sys.executable, "-c", code,
                           str(tmp_path / "r")], capture_output=True, text=True,
                          env=clean_env(), timeout=120)
     assert out.returncode == 0, out.stderr
     halt = first_check_at_or_after(20)
-    assert out.stdout.split().count(f"{halt + CHECK}") == 2  # both ranks ran the same steps
+    done = [(tmp_path / "r" / f"done.{rank}").read_text() for rank in (0, 1)]
+    assert done == [f"{halt + CHECK}"] * 2  # both ranks ran the same steps
     assert steps_in(tmp_path / "r", "halted.txt") == halt
