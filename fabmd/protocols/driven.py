@@ -51,7 +51,7 @@ from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.drag import damping_power as drag_power
-from ..scene.energy import ContactPower
+from ..scene.energy import MEAN_SAMPLE_EVERY, MEAN_SAMPLING_FROM, ContactPower, mean_sample_every
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
@@ -69,21 +69,6 @@ from .driven_outputs import (
 from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
-
-#: the interval means (forces, powers) sample every this many steps once the output
-#: interval is at least :data:`MEAN_SAMPLING_FROM` steps: a Riemann sum on a 10-step grid
-#: instead of every step (issue 20: the per-bead sums were most of a step's cost; the
-#: error is measured in benchmarks/RESULTS.md "Per-step cost of fabmd's fixes")
-MEAN_SAMPLE_EVERY = 10
-MEAN_SAMPLING_FROM = 20 * MEAN_SAMPLE_EVERY
-
-
-def mean_sample_every(every: int) -> int:
-    """Steps between the samples of the interval means for output interval ``every``:
-    :data:`MEAN_SAMPLE_EVERY` where it divides a long enough interval, else every step."""
-    if every >= MEAN_SAMPLING_FROM and every % MEAN_SAMPLE_EVERY == 0:
-        return MEAN_SAMPLE_EVERY
-    return 1
 
 
 @dataclass

@@ -57,6 +57,7 @@ import numpy as np
 
 from .. import inputs
 from ..errors import InputError
+from .energy import mean_sample_every
 from .plan import RunPlan
 from .quasi_static import INTERVAL_LIMITS
 from .templates import render
@@ -188,8 +189,7 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
     x = plan.extra
     interval = x["control_interval_steps"]
     gain = x["gain"]
-    # the means sampled every 10 steps where that divides a long interval (as the outputs')
-    sample = 10 if interval >= 200 and interval % 10 == 0 else 1
+    sample = mean_sample_every(interval)  # as the outputs' interval means
     ln_up = math.log(x["max_speed_step"])
     if x.get("floor_force_n"):
         power_floor_w = x["floor_force_n"] * plan.speed_m_s

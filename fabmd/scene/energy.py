@@ -6,7 +6,7 @@ elastic energy). Every term is measured on its own:
 
 * external work and damping dissipation: power summed over the beads and averaged
   over each output interval in LAMMPS (every step, or every 10 steps of a long interval:
-  a Riemann sum on that grid, ``fabmd.protocols.driven.mean_sample_every``);
+  a Riemann sum on that grid, :func:`mean_sample_every`);
 * strain and kinetic energy: LAMMPS energies at each output;
 * contact work: the power of the contact forces on the relative motion of every
   contact pair, summed from ``compute pair/local`` between chunks of the
@@ -35,6 +35,22 @@ import numpy as np
 from ..engine import mpi
 from ..errors import QuasiStaticWarning
 from .templates import render
+
+#: the interval means (forces, powers) sample every this many steps once the output
+#: interval is at least :data:`MEAN_SAMPLING_FROM` steps: a Riemann sum on a 10-step grid
+#: instead of every step (issue 20: the per-bead sums were most of a step's cost; the
+#: error is measured in benchmarks/RESULTS.md "Per-step cost of fabmd's fixes")
+MEAN_SAMPLE_EVERY = 10
+MEAN_SAMPLING_FROM = 20 * MEAN_SAMPLE_EVERY
+
+
+def mean_sample_every(every: int) -> int:
+    """Steps between the samples of the interval means for output interval ``every``:
+    :data:`MEAN_SAMPLE_EVERY` where it divides a long enough interval, else every step."""
+    if every >= MEAN_SAMPLING_FROM and every % MEAN_SAMPLE_EVERY == 0:
+        return MEAN_SAMPLE_EVERY
+    return 1
+
 
 LMP_STYLE_LOCAL = 2
 LMP_TYPE_ARRAY = 2
