@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import fcntl
 import functools
 import os
 import shutil
@@ -29,6 +30,24 @@ def lammps_missing() -> str:
     except EngineUnavailable as exc:
         return str(exc)
     return ""
+
+
+@pytest.fixture(autouse=True)
+def one_mpirun_test_at_a_time(request, tmp_path_factory):
+    """Tests marked ``mpi`` take turns, across pytest-xdist workers: two mpirun tests side
+    by side put four busy-polling MPI ranks on the suite's two cores and each crawls
+    (seconds alone, minutes together). The lock is a file in the directory the workers'
+    temporary folders share; the kernel releases it if a worker dies."""
+    if request.node.get_closest_marker("mpi") is None:
+        yield
+        return
+    lock_path = tmp_path_factory.getbasetemp().parent / "fabmd-mpi-tests.lock"
+    with open(lock_path, "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def pytest_runtest_setup(item):
