@@ -110,8 +110,8 @@ class Compaction:
             is not reached (the summary says so).
         local_damping: Cundall local damping coefficient, [0, 1).
         settle_fraction: the fabric first settles between the platens at rest for this
-            fraction of the longest loading time, [0, 1] (a whole number of intervals; with
-            the default speed, of the loading time at 5e-6 of the axial wave speed).
+            fraction of the longest loading time at 5e-6 of the fibres' axial wave speed,
+            whatever the platen speed, [0, 1] (a whole number of intervals).
         contact: fibre–fibre contact.
         tool: platen contact (per unit length of fibre on the platen).
         time_step: time-step policy.
@@ -228,8 +228,7 @@ class Compaction:
         every = max(1, steps // self.samples)
         # the settle is the fabric's own time, not the platen's: as long as at the axial
         # fallback speed, whatever the platen speed
-        reference = compaction_speed.FALLBACK_SPEED_FRACTION * how["axial_wave_speed_m_s"] \
-            if how["speed_basis"] == "through_thickness" else speed
+        reference = compaction_speed.FALLBACK_SPEED_FRACTION * how["axial_wave_speed_m_s"]
         settle = every * max(1, round(self.settle_fraction * self.samples * speed / reference))
         estimate = compaction_speed.estimated_steps(
             self.contact, hi - lo, travel, self.max_pressure_pa, speed, dt, self.unload)
