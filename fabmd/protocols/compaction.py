@@ -125,7 +125,7 @@ class Compaction:
     datasheet_pressure_pa: float | None = None
     speed_fraction: float | None = None
     mismatch_target: float = 0.1
-    step_limit: int = 20_000_000
+    step_limit: int = 50_000_000
     reruns: int = 2
     max_travel_fraction: float = 0.8
     local_damping: float = 0.7
