@@ -82,3 +82,53 @@ def test_a_failed_pressure_asks_for_a_slower_rerun():
                        "10000": {"platen_pressure_mismatch": 0.2, "ok": False,
                                  "speed_fraction_below": 4e-6}})
     assert rerun_speed_fraction({"quasi_static_at_pressure": late}) == pytest.approx(0.7 * 2e-6)
+
+
+#: the tiny cell's crossings (per unit length): stiff enough that the law's speed is too fast
+STIFF = "1 GPa"
+#: thickness at a reported pressure, default against half its final speed (measured:
+#: 2e-6 relative at 5 and 10 kPa)
+THICKNESS_TOLERANCE = 1e-4
+
+
+@pytest.mark.lammps
+@pytest.mark.slow
+def test_default_speed_makes_every_reported_thickness_quasi_static(tmp_path):
+    """The law of the contact predicts a soft fabric (K_t = 2·(p + 250 Pa)), so the first run
+    is fast (0.1 m/s); the tiny cell's crossings are stiff, so — as on the one-row Twintex
+    cell — the load had not crossed it at the reported pressures. The default runs again at
+    the speed the mismatch asks for until every reported thickness is quasi-static, and a
+    run at half that speed gives the same thicknesses (about 40 s)."""
+    import warnings
+
+    from fabmd.engine import Engine
+    from fabmd.model.contact import ToolContact
+
+    cell = plain_weave_cell()
+    d = 0.5e-3  # the cell's fibres; same-family fibres never touch in it
+    bundle = BundleContact(LAW, 0.2 * HEX_CELL * d**2, d)
+    stiff = {"normal_stiffness_pa": STIFF}
+    base = {"max_pressure_pa": "20 kPa", "datasheet_pressure_pa": "5 kPa", "unload": False,
+            "contact": ContactModel(within_family_law=bundle, **stiff),
+            "tool": ToolContact(friction=0.2, **stiff)}
+    engine = Engine(progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the final run is quasi-static: no warning
+        s = Compaction(**base).run(cell, tmp_path / "default", engine=engine).summary
+    first, last = s["speed_runs"][0], s["speed_runs"][-1]
+    assert first["speed_basis"] == "through_thickness"
+    assert first["platen_speed_m_s"] == pytest.approx(0.1, rel=0.01)
+    assert not all(v["ok"] for v in first["quasi_static_at_pressure"].values())
+    assert len(s["speed_runs"]) >= 2 and last["speed_fraction"] < first["speed_fraction"]
+    at = s["quasi_static_at_pressure"]
+    assert set(at) >= {"5000", "10000"} and all(v["ok"] for v in at.values()), at
+    assert s["quasi_static"]["ok"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        half = Compaction(**base, speed_fraction=0.5 * s["run_speed_fraction"]).run(
+            cell, tmp_path / "half", engine=engine).summary
+    assert len(half["speed_runs"]) == 1  # a set speed is not rerun
+    assert all(v["ok"] for v in half["quasi_static_at_pressure"].values())
+    for p in ("5000", "10000"):
+        assert s["thickness_at_pressure_m"][p] == pytest.approx(
+            half["thickness_at_pressure_m"][p], rel=THICKNESS_TOLERANCE)

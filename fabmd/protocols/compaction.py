@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -325,7 +326,14 @@ class Compaction:
                                   {self.protocol: scene_dict(self)}, overwrite, resume,
                                   plan=self.plan(model), files=blocks.contact_files(
                                       self.contact, model_bead_parameters(model)))
-        run = run_folder(engine or Engine(), run_dir, self.protocol, resume=resume)
+        engine = engine or Engine()
+        plan = self.plan(model)
+        if engine.progress and mpi.is_root() and not resume:  # the speed and what it costs
+            print(f"compaction: platen speed {plan.speed_m_s:.3g} m/s "
+                  f"({plan.extra['speed_note']}); about "
+                  f"{plan.extra['estimated_steps']:,} steps (estimate)", file=sys.stderr,
+                  flush=True)
+        run = run_folder(engine, run_dir, self.protocol, resume=resume)
         result, caught = None, []
         if mpi.is_root():
             with warnings.catch_warnings(record=True) as caught:
