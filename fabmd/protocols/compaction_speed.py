@@ -23,10 +23,13 @@ K_t = Vf·dp/dVf = n·k·E·Vf^n = n·(p + k·E·Vf_s^n), with Vf_s = max(Vf0, V
 realised is shifted to 0 where the virtual fibres touch). Of several families the stiffest
 is taken (the slower speed). Chosen over a modulus measured on the fly because it is known
 before the run (speed, steps and refusal stated before LAMMPS starts) and the input stays a
-plain constant-speed ramp. Checked against the stop-19 Twintex runs at speed_fraction 2e-5
-(benchmarks/RESULTS.md "Compaction speed"): the measured mismatch was 0.25–0.3 of this
-prediction at 1–10 kPa where the law acts through the thickness (19 fibres) and at 1 kPa on
-the one-row 7-fibre cell. Without a law (solid-rod contact) the fabric's stiffness comes
+plain constant-speed ramp. Checked on Twintex cells (benchmarks/RESULTS.md "Compaction
+speed"): where the law acts through the thickness (19 fibres per yarn in two rows) the
+measured mismatch was 0.25 of this prediction at 4.14 and 10 kPa and 0.85 at 100 kPa; where
+it does not (7 fibres in one row: only the stiff crossings carry the load across) it was 7×
+the prediction at 4.14 kPa — so a run whose reported thickness fails its verdict runs again
+at the speed the measured mismatch asks for (:func:`fabmd.protocols.compaction.
+rerun_speed_fraction`). Without a law (solid-rod contact) the fabric's stiffness comes
 from its crossings' geometry, which no contact parameter predicts (a hexagonal bundle of
 solid-rod contacts would be 200× stiffer than the measured plain-weave cell): the speed
 stays the fraction ``FALLBACK_SPEED_FRACTION`` of the fibres' axial wave speed, and the
