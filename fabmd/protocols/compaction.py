@@ -101,7 +101,8 @@ class Compaction:
             contact: 5e-6 of the axial wave speed).
         mismatch_target: the predicted top/bottom platen mismatch at the lowest reported
             pressure that sets the default speed, (0, 0.1] (0.1: the verdict's limit; the
-            measured mismatch was 0.25–0.3 of the prediction).
+            measured mismatch was 0.25 of the prediction where the law acts through the
+            thickness, 7× it on a one-row Twintex cell, which ``reruns`` then slowed).
         step_limit: the most steps (loading and unloading, estimated before the run) a run
             may need, >= 1000; above it the run is refused before LAMMPS starts.
         reruns: with the default speed, the most times a run whose reported thickness is
