@@ -120,6 +120,8 @@ def test_default_speed_makes_every_reported_thickness_quasi_static(tmp_path):
     assert first["platen_speed_m_s"] == pytest.approx(0.1, rel=0.01)
     assert not all(v["ok"] for v in first["quasi_static_at_pressure"].values())
     assert len(s["speed_runs"]) >= 2 and last["speed_fraction"] < first["speed_fraction"]
+    assert last["speed_basis"] == s["speed_basis"] == "rerun"
+    assert "of what the mismatch at" in s["speed_note"]
     at = s["quasi_static_at_pressure"]
     assert set(at) >= {"5000", "10000"} and all(v["ok"] for v in at.values()), at
     assert s["quasi_static"]["ok"]

@@ -189,9 +189,13 @@ class Compaction:
         beads = model_bead_parameters(model)
         if self.speed_fraction is not None:
             c = compaction_speed.axial_wave_speed_m_s(beads)
-            return {"platen_speed_m_s": self.speed_fraction * c, "speed_basis": "set",
+            rerun = self.__dict__.get("_rerun_of")  # no field: see run()
+            return {"platen_speed_m_s": self.speed_fraction * c,
+                    "speed_basis": "rerun" if rerun else "set",
                     "speed_note": f"speed_fraction {self.speed_fraction:g} of the fibres' "
-                                  f"axial wave speed {c:.4g} m/s",
+                                  f"axial wave speed {c:.4g} m/s"
+                                  + (f": {RERUN_MARGIN:g} of what the mismatch at {rerun} "
+                                     f"asked for" if rerun else ""),
                     "axial_wave_speed_m_s": c}
         lo, hi = self.platens(model)
         return compaction_speed.platen_speed(
@@ -307,6 +311,10 @@ class Compaction:
             if slower is None:
                 break
             test = dataclasses.replace(self, speed_fraction=slower)
+            # which pressures asked for it (kept off the fields: scene.json says the speed)
+            object.__setattr__(test, "_rerun_of", ", ".join(
+                f"{float(k):g} Pa" for k, v in summary["quasi_static_at_pressure"].items()
+                if not v["ok"]))
             try:  # a rerun is refused like a first run: too many steps
                 test.plan(model)
             except InputError as exc:
