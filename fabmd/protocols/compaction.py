@@ -313,8 +313,8 @@ class Compaction:
             test = dataclasses.replace(self, speed_fraction=slower)
             # which pressures asked for it (kept off the fields: scene.json says the speed)
             object.__setattr__(test, "_rerun_of", ", ".join(
-                f"{float(k):g} Pa" for k, v in summary["quasi_static_at_pressure"].items()
-                if not v["ok"]))
+                [f"{float(k):g} Pa" for k, v in summary["quasi_static_at_pressure"].items()
+                 if not v["ok"]] or ["the curve's largest"]))
             try:  # a rerun is refused like a first run: too many steps
                 test.plan(model)
             except InputError as exc:
@@ -448,10 +448,16 @@ def rerun_speed_fraction(summary: dict) -> float | None:
 
     Where a reported thickness was not quasi-static, its mismatch m ≈ ρ_f·c_t·v/p measured
     the fabric's through-thickness impedance at that pressure, so the speed that brings the
-    worst to the limit is ``speed_fraction_below`` (:func:`mismatch_at`); the rerun takes
-    :data:`RERUN_MARGIN` of the slowest of them."""
+    worst to the limit is ``speed_fraction_below`` (:func:`mismatch_at`); the same for the
+    curve's largest mismatch (``max_platen_pressure_mismatch``: a curve whose first sample
+    with both platens loaded is already above every reported pressure has no per-pressure
+    verdict). The rerun takes :data:`RERUN_MARGIN` of the slowest of them."""
     late = [v["speed_fraction_below"] for v in summary.get("quasi_static_at_pressure",
                                                            {}).values() if not v["ok"]]
+    limit = QUASI_STATIC_LIMITS["max_platen_pressure_mismatch"]
+    worst = summary.get("max_platen_pressure_mismatch")
+    if worst is not None and worst > limit and summary.get("run_speed_fraction"):
+        late.append(summary["run_speed_fraction"] * limit / worst)
     return RERUN_MARGIN * min(late) if late else None
 
 
