@@ -306,7 +306,8 @@ class Compaction:
                 self.speed_fraction is None and len(runs) < self.reruns) else None
             runs.append({k: summary.get(k) for k in (
                 "speed_basis", "platen_speed_m_s", "wave_speed_fraction", "time_step_s",
-                "quasi_static_at_pressure", "steps_run", "wall_s")}
+                "quasi_static_at_pressure", "max_platen_pressure_mismatch", "steps_run",
+                "wall_s")}
                 | {"speed_fraction": summary["run_speed_fraction"]})
             if slower is None:
                 break
