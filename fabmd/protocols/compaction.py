@@ -7,7 +7,10 @@ touched while still moving would kick it into the other one: Cundall damping doe
 damp a drift); then it lies on a fixed bottom platen at its lowest bead surface, and
 the top platen, from its highest, comes down at
 a constant speed until the mean pressure over an output interval reaches
-``max_pressure_pa``, then goes back up as far as it came. Both platens are
+``max_pressure_pa``, then goes back up as far as it came. The speed is set by the fabric's
+through-thickness wave speed so that the reported thicknesses are measured with the load
+through the fabric (:mod:`fabmd.protocols.compaction_speed`); ``speed_fraction`` overrides
+it with a fraction of the fibres' axial wave speed. Both platens are
 ``fix wall/gran/region`` planes (``granular hooke ... linear_history``, see
 :class:`~fabmd.model.contact.ToolContact`).
 
@@ -29,7 +32,9 @@ carry the load) and above 10 % of the peak (:func:`quasi_static_measures`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +54,7 @@ from ..scene import blocks
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.templates import render
 from ..units import quantity
+from . import compaction_speed
 from .common import DATA_FILE, open_run_folder, overlap_summary, run_folder, scene_dict
 from .driven import DrivenResult, shared_result
 from .periodic import check_periodic_cell
@@ -88,13 +94,26 @@ class Compaction:
         max_pressure_pa: pressure at which the platen turns back [Pa] (> 0; "200 kPa").
         datasheet_pressure_pa: a pressure at which the datasheet states the thickness
             [Pa]; reported too (None: none).
-        speed_fraction: platen speed over the fibres' axial wave speed, (0, 0.01].
+        speed_fraction: platen speed over the fibres' axial wave speed, (0, 0.01]; None
+            (default): from the fabric's through-thickness wave speed, so that the predicted
+            platen mismatch at the lowest reported pressure is ``mismatch_target``
+            (:mod:`~fabmd.protocols.compaction_speed`; without a yarn compaction law in the
+            contact: 5e-6 of the axial wave speed).
+        mismatch_target: the predicted top/bottom platen mismatch at the lowest reported
+            pressure that sets the default speed, (0, 0.1] (0.1: the verdict's limit; the
+            measured mismatch was 0.25 of the prediction where the law acts through the
+            thickness, 7× it on a one-row Twintex cell, which ``reruns`` then slowed).
+        step_limit: the most steps (loading and unloading, estimated before the run) a run
+            may need, >= 1000; above it the run is refused before LAMMPS starts.
+        reruns: with the default speed, the most times a run whose reported thickness is
+            not quasi-static runs again at the speed its mismatch asks for, >= 0.
         max_travel_fraction: the furthest the top platen may go down, as a fraction
             of the starting gap, (0, 0.95]; the loading stops there if the pressure
             is not reached (the summary says so).
         local_damping: Cundall local damping coefficient, [0, 1).
         settle_fraction: the fabric first settles between the platens at rest for this
-            fraction of the longest loading time, [0, 1] (a whole number of intervals).
+            fraction of the longest loading time at 5e-6 of the fibres' axial wave speed,
+            whatever the platen speed, [0, 1] (a whole number of intervals).
         contact: fibre–fibre contact.
         tool: platen contact (per unit length of fibre on the platen).
         time_step: time-step policy.
@@ -106,7 +125,10 @@ class Compaction:
 
     max_pressure_pa: float = 2e5
     datasheet_pressure_pa: float | None = None
-    speed_fraction: float = 5e-6
+    speed_fraction: float | None = None
+    mismatch_target: float = 0.1
+    step_limit: int = 50_000_000
+    reruns: int = 2
     max_travel_fraction: float = 0.8
     local_damping: float = 0.7
     settle_fraction: float = 0.02
@@ -127,8 +149,13 @@ class Compaction:
                 "compaction.datasheet_pressure_pa",
                 quantity(self.datasheet_pressure_pa, "pressure",
                          "compaction.datasheet_pressure_pa")))
-        inputs.in_range("compaction.speed_fraction", self.speed_fraction, 0, 0.01,
+        if self.speed_fraction is not None:
+            inputs.in_range("compaction.speed_fraction", self.speed_fraction, 0, 0.01,
+                            low_open=True)
+        inputs.in_range("compaction.mismatch_target", self.mismatch_target, 0, 0.1,
                         low_open=True)
+        inputs.positive_int("compaction.step_limit", self.step_limit, minimum=1000)
+        inputs.positive_int("compaction.reruns", self.reruns, minimum=0)
         inputs.in_range("compaction.max_travel_fraction", self.max_travel_fraction, 0, 0.95,
                         low_open=True)
         inputs.in_range("compaction.local_damping", self.local_damping, 0, 1, high_open=True)
@@ -148,9 +175,36 @@ class Compaction:
         size = model.box_hi - model.box_lo
         return float(size[0] * size[1])
 
+    def lowest_report_pressure_pa(self) -> float:
+        """The lowest pressure whose thickness is reported [Pa] (at most the turn's)."""
+        targets = REPORT_PRESSURES_PA + ((self.datasheet_pressure_pa,)
+                                         if self.datasheet_pressure_pa is not None else ())
+        return min(min(targets), self.max_pressure_pa)
+
+    def speed(self, model: BeadModel) -> dict:
+        """The platen speed ``platen_speed_m_s`` [m/s] and what it came from (JSON-able):
+        ``speed_fraction`` of the axial wave speed if set, else from the fabric's
+        through-thickness wave speed (:func:`~fabmd.protocols.compaction_speed.platen_speed`
+        at :meth:`lowest_report_pressure_pa`, density over the starting gap)."""
+        beads = model_bead_parameters(model)
+        if self.speed_fraction is not None:
+            c = compaction_speed.axial_wave_speed_m_s(beads)
+            rerun = self.__dict__.get("_rerun_of")  # no field: see run()
+            return {"platen_speed_m_s": self.speed_fraction * c,
+                    "speed_basis": "rerun" if rerun else "set",
+                    "speed_note": f"speed_fraction {self.speed_fraction:g} of the fibres' "
+                                  f"axial wave speed {c:.4g} m/s"
+                                  + (f": {RERUN_MARGIN:g} of what the mismatch at {rerun} "
+                                     f"asked for" if rerun else ""),
+                    "axial_wave_speed_m_s": c}
+        lo, hi = self.platens(model)
+        return compaction_speed.platen_speed(
+            self.contact, model, beads, self.area_m2(model), hi - lo,
+            self.lowest_report_pressure_pa(), self.mismatch_target)
+
     def speed_m_s(self, model: BeadModel) -> float:
-        c = min(b.wave_speed_m_s for b in model_bead_parameters(model))
-        return self.speed_fraction * c
+        """The platen speed [m/s] (:meth:`speed`)."""
+        return self.plan(model).speed_m_s
 
     def time_step_s(self, model: BeadModel) -> float:
         return self.plan(model).time_step_s
@@ -174,12 +228,24 @@ class Compaction:
         dt = stable_time_step_s(model, [self.contact, self.tool], self.time_step)
         lo, hi = self.platens(model)
         travel = self.max_travel_fraction * (hi - lo)
-        speed = self.speed_m_s(model)
+        how = self.speed(model)
+        speed = how["platen_speed_m_s"]
         steps = math.ceil(travel / speed / dt)
         every = max(1, steps // self.samples)
-        settle = every * max(1, round(self.settle_fraction * self.samples))
+        # the settle is the fabric's own time, not the platen's: as long as at the axial
+        # fallback speed, whatever the platen speed
+        reference = compaction_speed.FALLBACK_SPEED_FRACTION * how["axial_wave_speed_m_s"]
+        settle = every * max(1, round(self.settle_fraction * self.samples * speed / reference))
+        estimate = compaction_speed.estimated_steps(
+            self.contact, hi - lo, travel, self.max_pressure_pa, speed, dt, self.unload)
+        compaction_speed.check_steps(estimate["estimated_steps"] + settle, self.step_limit,
+                                     how)
         return RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=travel / speed,
-                       speed_m_s=speed, extra={"settle_steps": settle})
+                       speed_m_s=speed, extra={"settle_steps": settle,
+                                               "estimated_steps": estimate["estimated_steps"]
+                                               + settle,
+                                               "estimated_travel_m":
+                                                   estimate["estimated_travel_m"], **how})
 
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
@@ -220,22 +286,71 @@ class Compaction:
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
             overwrite: bool = False, check_rate: bool = False,
             resume: bool = False) -> DrivenResult:
-        """Compress ``model`` and release it; ``check_rate`` is not offered (say so)."""
+        """Compress ``model`` and release it; ``check_rate`` is not offered (say so).
+
+        With the default speed (``speed_fraction`` None), a run whose reported thickness
+        is not quasi-static runs again, up to ``reruns`` times, at the speed its own
+        mismatch asks for (:func:`rerun_speed_fraction`: the fabric's through-thickness
+        wave speed as measured, where the law's was wrong); the summary lists every run
+        (``speed_runs``)."""
         if check_rate:
             raise InputError("compaction has no --check-rate; rerun with half "
                              "speed_fraction to check the rate")
+        test, runs = self, []
+        while True:
+            result, caught, run_dir = test._run_once(model, out, engine,
+                                                     overwrite or bool(runs),
+                                                     resume and not runs)
+            summary = mpi.bcast_json(result.summary if result else None)
+            slower = rerun_speed_fraction(summary) if (
+                self.speed_fraction is None and len(runs) < self.reruns) else None
+            runs.append({k: summary.get(k) for k in (
+                "speed_basis", "platen_speed_m_s", "wave_speed_fraction", "time_step_s",
+                "quasi_static_at_pressure", "max_platen_pressure_mismatch", "steps_run",
+                "wall_s")}
+                | {"speed_fraction": summary["run_speed_fraction"]})
+            if slower is None:
+                break
+            test = dataclasses.replace(self, speed_fraction=slower)
+            # which pressures asked for it (kept off the fields: scene.json says the speed)
+            object.__setattr__(test, "_rerun_of", ", ".join(
+                [f"{float(k):g} Pa" for k, v in summary["quasi_static_at_pressure"].items()
+                 if not v["ok"]] or ["the curve's largest"]))
+            try:  # a rerun is refused like a first run: too many steps
+                test.plan(model)
+            except InputError as exc:
+                runs[-1]["rerun_refused"] = str(exc)
+                break
+        if result is not None:
+            for w in caught:  # the last run's warnings only (the others were rerun)
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            result.summary["speed_runs"] = runs
+            result.write()
+        return shared_result(result, run_dir)
+
+    def _run_once(self, model: BeadModel, out, engine, overwrite: bool, resume: bool):
+        """One run at this speed: (rank 0's result, not yet written, or None; the warnings
+        its reduction gave; the run folder)."""
         text = self.input_text(model)  # validates before anything is written
         run_dir = open_run_folder(out, self.protocol, model, text,
                                   {self.protocol: scene_dict(self)}, overwrite, resume,
                                   plan=self.plan(model), files=blocks.contact_files(
                                       self.contact, model_bead_parameters(model)))
-        run = run_folder(engine or Engine(), run_dir, self.protocol, resume=resume)
-        result = None
+        engine = engine or Engine()
+        plan = self.plan(model)
+        if engine.progress and mpi.is_root() and not resume:  # the speed and what it costs
+            print(f"compaction: platen speed {plan.speed_m_s:.3g} m/s "
+                  f"({plan.extra['speed_note']}); about "
+                  f"{plan.extra['estimated_steps']:,} steps (estimate)", file=sys.stderr,
+                  flush=True)
+        run = run_folder(engine, run_dir, self.protocol, resume=resume)
+        result, caught = None, []
         if mpi.is_root():
-            result = self.reduce(Path(run_dir), model)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                result = self.reduce(Path(run_dir), model)
             result.summary.update(wall_s=run.wall_s, ranks=run.ranks, backend=run.backend)
-            result.write()
-        return shared_result(result, run_dir)
+        return result, caught, run_dir
 
     def reduce(self, run_dir: Path, model: BeadModel) -> DrivenResult:
         means = read_ave_time(run_dir / "means.dat")
@@ -269,6 +384,9 @@ class Compaction:
         contact = np.zeros(p.size, dtype=bool)
         contact[np.nonzero(loading)[0][first:]] = True
         measures = quasi_static_measures(p, pb, ke, work, contact & (p > 0.1 * peak))
+        # this run's platen speed over the fibres' axial wave speed
+        run_fraction = plan.speed_m_s / compaction_speed.axial_wave_speed_m_s(
+            model_bead_parameters(model))
         targets = tuple(REPORT_PRESSURES_PA)
         if self.datasheet_pressure_pa is not None:
             targets += (self.datasheet_pressure_pa,)
@@ -279,6 +397,9 @@ class Compaction:
             "area_m2": area,
             "time_step_s": dt,
             "platen_speed_m_s": plan.speed_m_s,
+            "run_speed_fraction": run_fraction,
+            "steps_run": int(means["step"][-1]),
+            **{k: v for k, v in plan.extra.items() if k != "settle_steps"},
             "starting_gap_m": hi - lo,
             # how far the free settle moved the outermost bead surfaces (bottom, top)
             "settle_shift_m": [lo - model_lo, hi - model_hi],
@@ -307,7 +428,7 @@ class Compaction:
         }
         summary["quasi_static_at_pressure"] = mismatch_at(
             pc, pb[loading][first:], targets, QUASI_STATIC_LIMITS["max_platen_pressure_mismatch"],
-            plan.speed_m_s / self.speed_m_s(model) * self.speed_fraction)
+            run_fraction)
         problems = judge_quasi_static(summary, run_dir)
         if not reached:
             summary["pressure_note"] = (
@@ -316,6 +437,29 @@ class Compaction:
                 f"max_travel_fraction or lower max_pressure_pa")
         return DrivenResult(run_dir, curve, summary, [curve_plot(p, h, loading, summary,
                                                                  bool(problems))])
+
+
+#: a rerun goes this much below the speed the failed run's mismatch asks for (the mismatch
+#: is only about proportional to the speed)
+RERUN_MARGIN = 0.7
+
+
+def rerun_speed_fraction(summary: dict) -> float | None:
+    """The speed fraction (of the axial wave speed) for a run again, or None: none needed.
+
+    Where a reported thickness was not quasi-static, its mismatch m ≈ ρ_f·c_t·v/p measured
+    the fabric's through-thickness impedance at that pressure, so the speed that brings the
+    worst to the limit is ``speed_fraction_below`` (:func:`mismatch_at`); the same for the
+    curve's largest mismatch (``max_platen_pressure_mismatch``: a curve whose first sample
+    with both platens loaded is already above every reported pressure has no per-pressure
+    verdict). The rerun takes :data:`RERUN_MARGIN` of the slowest of them."""
+    late = [v["speed_fraction_below"] for v in summary.get("quasi_static_at_pressure",
+                                                           {}).values() if not v["ok"]]
+    limit = QUASI_STATIC_LIMITS["max_platen_pressure_mismatch"]
+    worst = summary.get("max_platen_pressure_mismatch")
+    if worst is not None and worst > limit and summary.get("run_speed_fraction"):
+        late.append(summary["run_speed_fraction"] * limit / worst)
+    return RERUN_MARGIN * min(late) if late else None
 
 
 def first_contact(p: np.ndarray, pb: np.ndarray) -> int:
