@@ -51,7 +51,13 @@ from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.drag import damping_power as drag_power
-from ..scene.energy import MEAN_SAMPLE_EVERY, MEAN_SAMPLING_FROM, ContactPower, mean_sample_every
+from ..scene.energy import (
+    MEAN_SAMPLE_EVERY,
+    MEAN_SAMPLING_FROM,
+    ContactEnergy,
+    ContactPower,
+    mean_sample_every,
+)
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
@@ -150,8 +156,12 @@ class DrivenTest:
         """The model the run starts from (validated; a protocol may add bond types)."""
         return model
 
-    def make_monitor(self) -> ContactPower:
-        return ContactPower(self.contact.pair_style())
+    def make_monitor(self, model: BeadModel | None = None) -> ContactPower:
+        """The contact-power monitor; on ``model`` it samples the contacts' elastic energy
+        too (:class:`~fabmd.scene.energy.ContactEnergy`)."""
+        energy = None if model is None else ContactEnergy.for_contact(
+            self.contact, model_bead_parameters(model), model.family_names)
+        return ContactPower(self.contact.pair_style(), energy)
 
     def quasi_static_evidence(self, out: Outputs, model: BeadModel, progress: np.ndarray,
                               work_ratio: bool = True) -> dict:
@@ -298,6 +308,7 @@ class DrivenTest:
             blocks.contact(model, self.contact, beads),
             protocol_text,
             ContactPower.commands(self.contact.pair_style()),
+            ContactEnergy.commands(),
             *after,
         ])
 
@@ -355,7 +366,7 @@ class DrivenTest:
                                   {self.protocol: scene_dict(self)}, overwrite, resume,
                                   plan=self.plan(start), files=blocks.contact_files(
                                       self.contact, model_bead_parameters(start)))
-        monitor = monitor or self.make_monitor()
+        monitor = monitor or self.make_monitor(start)
         run, trajectory = run_with_trajectory(engine, run_dir, self.protocol, self.trajectory,
                                               start, resume, monitor=monitor,
                                               monitor_every=self.every(start))
