@@ -329,23 +329,32 @@ class DrivenTest:
     def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
                       mean_values: str = "", mean_names: str = "", print_values: str = "",
                       print_names: str = "", thermo_values: str = "",
-                      damping_power: str | None = None) -> str:
+                      damping_power: str | None = None,
+                      affine: AffineField | None = None) -> str:
         """Interval means, printed curve and thermo (``driven_outputs.lmp``);
         ``damping_power``: LAMMPS text defining ``v_p_damp``, the drag's power on the free
         beads (:func:`fabmd.scene.drag.damping_power`; default: that of a drag γ·v on the
-        absolute velocity)."""
+        absolute velocity); ``affine``: the tools' affine velocity field, whose relative
+        kinetic energy the curve then prints too (``kinetic_relative_j``,
+        ``kinetic_relative.lmp``)."""
+        block = ""
+        if affine is not None:
+            block = render("kinetic_relative", tools=affine.tools, affine_vx=affine.vx,
+                           affine_vy=affine.vy)
+            print_values = f"{print_values} ${{ke_rel}}".strip()
+            print_names = f"{print_names} kinetic_relative_j".strip()
         every = self.every(model)
         sample_every = mean_sample_every(every)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
         if damping_power is None:
             damping_power = drag_power("free", self.gamma(model))
-        return render("driven_outputs", external_power=external_power, strain_energy=strain,
-                      external_ref=external_ref, damping_power=damping_power, every=every,
-                      sample_every=sample_every, samples=every // sample_every,
-                      mean_values=mean_values, mean_names=mean_names,
-                      print_values=print_values, print_names=print_names,
-                      thermo_values=thermo_values,
-                      thermo_every=max(every, self.steps(model) // 20))
+        return block + render(
+            "driven_outputs", external_power=external_power, strain_energy=strain,
+            external_ref=external_ref, damping_power=damping_power, every=every,
+            sample_every=sample_every, samples=every // sample_every,
+            mean_values=mean_values, mean_names=mean_names, print_values=print_values,
+            print_names=print_names, thermo_values=thermo_values,
+            thermo_every=max(every, self.steps(model) // 20))
 
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,

@@ -68,6 +68,8 @@ def energy_columns(out: Outputs) -> dict[str, np.ndarray]:
         cols["contact_work_j"] = out.contact_j
     if out.contact_energy_j is not None:
         cols["contact_energy_j"] = out.contact_energy_j
+    if "kinetic_relative_j" in out.columns:  # relative to the tools' affine field
+        cols["kinetic_relative_j"] = out["kinetic_relative_j"]
     return cols
 
 
