@@ -76,6 +76,14 @@ from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
 
+#: what U of the KE/U measures counts (summary ``elastic_energy``): with the contacts'
+#: elastic energy sampled (in-process) or not (standalone)
+ELASTIC_NOTE = {True: "U = bond strain energy + the contacts' elastic energy (normal springs "
+                      "and the within-family law; tangential springs left out)",
+                False: "U = bond strain energy only (the contacts' elastic energy is sampled "
+                       "by the in-process back end only, or a sample's pairs did not line "
+                       "up)"}
+
 
 @dataclass
 class DrivenResult(RunResult):
@@ -174,7 +182,8 @@ class DrivenTest:
         if work_ratio:
             evidence["max_kinetic_to_external_work"] = kinetic_to_work_ratio(out, started)
         note = self.quasi_static_note if work_ratio else STARTED_NOTE
-        evidence.update(quasi_static_note=note, energy_balance=energy_balance(out))
+        evidence.update(quasi_static_note=note, energy_balance=energy_balance(out),
+                        elastic_energy=ELASTIC_NOTE[out.contact_energy_measured])
         return evidence
 
     # -- loading and time ------------------------------------------------------------

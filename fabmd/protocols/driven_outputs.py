@@ -35,12 +35,16 @@ class Outputs:
         return self.columns[name]
 
     @property
+    def contact_energy_measured(self) -> bool:
+        """Was the contacts' elastic energy sampled at every output (in-process)?"""
+        return self.contact_energy_j is not None and bool(
+            np.all(np.isfinite(self.contact_energy_j)))
+
+    @property
     def elastic_energy_j(self) -> np.ndarray:
         """U = bond strain energy + the contacts' elastic energy where sampled [J]."""
         u = self["strain_energy_j"]
-        if self.contact_energy_j is None or not np.all(np.isfinite(self.contact_energy_j)):
-            return u
-        return u + self.contact_energy_j
+        return u + self.contact_energy_j if self.contact_energy_measured else u
 
 
 def read_outputs(run_dir: Path, every: int, dt: float,

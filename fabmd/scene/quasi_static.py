@@ -138,7 +138,9 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
     * ``damping_share`` = ΔW_drag / ΔW_external: the drag's share of the work done in it;
     * ``inertia_share`` = |ΔKE| / ΔW_external: the share that went into kinetic energy;
     * ``kinetic_to_strain_energy``: the largest KE / U at the samples in it, U no less
-      than 1 % of the run's largest strain energy (a slack start has almost none).
+      than 1 % of the run's largest (a slack start has almost none). ``strain_j`` is the
+      elastic energy U: the bonds' plus, where sampled, the contacts' (the driven tests
+      pass both: :func:`fabmd.protocols.verdict.elastic_energy_j`).
 
     The cumulative works are read at the interval's ends by interpolation. A share
     whose interval took no external work (|ΔW| below 1e-9 of the run's) is not
