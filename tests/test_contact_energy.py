@@ -175,3 +175,56 @@ def test_the_whole_run_ratio_and_the_balance_count_the_contact_energy():
     assert terms["contact_energy_change_j"] == pytest.approx(0.5)
     assert terms["contact_dissipation_j"] == pytest.approx(0.1)
     assert terms["relative_error"] == pytest.approx(0.0)  # the split changes no closing
+
+
+# -- KE relative to the tools' affine field ---------------------------------------------
+def test_ke_over_u_takes_the_kinetic_energy_relative_to_the_affine_field(tmp_path):
+    """A fabric carried along by the frame: its absolute KE is the carriage (KE/U 0.5 with
+    contacts), its KE relative to the frame's field 1 % of that; KE/U reads the relative
+    one, the inertia share keeps the absolute one (what the tools pay for)."""
+    c = curve(contact=True)
+    c["kinetic_relative_j"] = 0.01 * c["kinetic_energy_j"]
+    c["kinetic_energy_j"] = 10 * c["kinetic_energy_j"]
+    verdict = add_interval_verdict(DrivenResult(tmp_path, c, {}), "x", 5.0)
+    assert [i["kinetic_to_strain_energy"] for i in verdict["intervals"]] == \
+        pytest.approx([0.0005] * 4)
+    dke = np.interp([0, 5], c["x"], c["kinetic_energy_j"])
+    assert verdict["intervals"][0]["inertia_share"] == pytest.approx(np.diff(dke)[0] / 5)
+    out = Outputs({"kinetic_j": c["kinetic_energy_j"], "strain_energy_j": c["strain_energy_j"],
+                   "kinetic_relative_j": c["kinetic_relative_j"]}, {}, c["external_work_j"],
+                  c["damping_dissipation_j"], None, c["contact_energy_j"])
+    assert kinetic_ratio(out, np.ones(41, bool)) == pytest.approx(0.0005)
+
+
+@pytest.mark.lammps
+def test_the_picture_frame_prints_the_relative_kinetic_energy(tmp_path):
+    """A 4 mm picture frame of the test plain weave: the curve carries
+    ``kinetic_relative_j`` and the summary's KE/U comes from it and from U_c; the fabric
+    follows the frame, so its KE relative to the frame's field is a small part of its KE."""
+    import warnings
+
+    from fabmd.errors import QuasiStaticWarning
+    from fabmd.protocols.coupon import Coupon
+    from fabmd.protocols.picture_frame import PictureFrame
+
+    from .fabrics import plain_weave_cell
+
+    engine = Engine(progress=False)
+    coupon = Coupon(length_m=4e-3, width_m=4e-3, relax=None).run(
+        plain_weave_cell(spacing_m=1e-3, gap=1.0), tmp_path / "coupon", engine=engine).model
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", QuasiStaticWarning)
+        r = PictureFrame(max_shear_angle_deg=30, samples=40).run(coupon, tmp_path / "pf",
+                                                                 engine=engine)
+    c = r.curve
+    assert "variable        ke_rel_atom atom" in (r.run_dir / "in.picture_frame").read_text()
+    mid = (c["shear_angle_deg"] > 10) & (c["shear_angle_deg"] < 25)
+    assert np.all(c["kinetic_relative_j"][mid] < 0.2 * c["kinetic_energy_j"][mid])
+    assert np.all(c["contact_energy_j"] > 0)
+    assert "contacts' elastic energy" in r.summary["elastic_energy"]
+    assert "affine" in r.summary["kinetic_energy"]
+    u_all = c["strain_energy_j"] + c["contact_energy_j"]
+    for iv in r.summary["quasi_static_intervals"]["intervals"]:
+        u = max(np.interp(iv["to"], c["shear_angle_deg"], u_all), 0.01 * u_all.max())
+        ke = np.interp(iv["to"], c["shear_angle_deg"], c["kinetic_relative_j"])
+        assert iv["kinetic_to_strain_energy"] >= ke / u * (1 - 1e-9)

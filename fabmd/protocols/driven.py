@@ -84,6 +84,12 @@ ELASTIC_NOTE = {True: "U = bond strain energy + the contacts' elastic energy (no
                        "by the in-process back end only, or a sample's pairs did not line "
                        "up)"}
 
+#: which kinetic energy KE/U counts (summary ``kinetic_energy``; the inertia measures keep
+#: the absolute one): relative to the tools' affine field where the test has one
+KINETIC_NOTE = {True: "KE of KE/U relative to the tools' affine velocity field (what they "
+                      "carry along is not counted); inertia share and KE/work: absolute KE",
+                False: "KE of KE/U: absolute (the test has no affine field)"}
+
 
 @dataclass
 class DrivenResult(RunResult):
@@ -144,9 +150,10 @@ class DrivenTest:
     #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
     interval_axis: ClassVar[tuple[str, float] | None] = None
     #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
-    quasi_static_note: ClassVar[str] = ("kinetic energy over the bond strain energy and over "
-                                        "the work done so far, after the smooth start and "
-                                        "the first tenth of the test")
+    quasi_static_note: ClassVar[str] = ("kinetic energy over the elastic energy (bonds and "
+                                        "contacts: elastic_energy) and over the work done "
+                                        "so far, after the smooth start and the first tenth "
+                                        "of the test")
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -183,7 +190,8 @@ class DrivenTest:
             evidence["max_kinetic_to_external_work"] = kinetic_to_work_ratio(out, started)
         note = self.quasi_static_note if work_ratio else STARTED_NOTE
         evidence.update(quasi_static_note=note, energy_balance=energy_balance(out),
-                        elastic_energy=ELASTIC_NOTE[out.contact_energy_measured])
+                        elastic_energy=ELASTIC_NOTE[out.contact_energy_measured],
+                        kinetic_energy=KINETIC_NOTE["kinetic_relative_j" in out.columns])
         return evidence
 
     # -- loading and time ------------------------------------------------------------
@@ -445,8 +453,10 @@ class ClampedTest(RelaxedDrivenTest):
     drag: str = "affine"
 
     quasi_static_note = (
-        "kinetic energy of the free fabric over the bond strain energy and over the work "
-        "done so far, after the smooth start and the first tenth of the displacement")
+        "kinetic energy of the free fabric (relative to the clamps' or frame's affine field: "
+        "kinetic_energy) over the elastic energy (bonds and contacts: elastic_energy) and "
+        "over the work done so far, after the smooth start and the first tenth of the "
+        "displacement")
 
     @staticmethod
     def clamp_edges(x: np.ndarray, low_m: float, high_m: float) -> tuple[float, float]:

@@ -95,10 +95,12 @@ def _largest_ratio(numerator: np.ndarray, denominator: np.ndarray) -> float | No
 
 
 def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic / elastic energy after start-up, U = bonds + contacts where the
+    """Largest kinetic / elastic energy after start-up: KE relative to the tools' affine
+    field where the curve has it (``kinetic_relative_j``), U = bonds + contacts where the
     contacts' energy was sampled (None when nothing is started or no started sample has
     elastic energy)."""
-    return _largest_ratio(out["kinetic_j"][started], out.elastic_energy_j[started])
+    ke = out.columns.get("kinetic_relative_j", out["kinetic_j"])
+    return _largest_ratio(ke[started], out.elastic_energy_j[started])
 
 
 def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:

@@ -130,11 +130,14 @@ def elastic_energy_j(curve: dict) -> np.ndarray:
 def add_interval_verdict(result: DrivenResult, column: str, width: float) -> dict:
     """Judge ``result``'s curve per interval of ``column`` (:func:`~fabmd.scene.
     quasi_static.interval_verdict`): the verdict goes into the summary
-    (``quasi_static_intervals``), its per-sample columns into the curve."""
+    (``quasi_static_intervals``), its per-sample columns into the curve. KE/U takes the
+    kinetic energy relative to the tools' affine field where the curve has it
+    (``kinetic_relative_j``: picture frame, tension, bias extension) and U =
+    :func:`elastic_energy_j`."""
     c = result.curve
     verdict = interval_verdict(c[column], c["external_work_j"], c["damping_dissipation_j"],
                                c["kinetic_energy_j"], elastic_energy_j(c), width,
-                               name=column)
+                               name=column, relative_kinetic_j=c.get("kinetic_relative_j"))
     result.summary["quasi_static_intervals"] = verdict
     result.curve.update(interval_columns(c[column], verdict))
     return verdict
