@@ -10,7 +10,7 @@ from fabmd.model.beads import Discretisation, bead_parameters
 from fabmd.model.contact import ContactModel, default_stiffness_pa
 from fabmd.protocols.common import run_folder, write_run_folder
 from fabmd.protocols.driven import DrivenResult
-from fabmd.protocols.driven_outputs import Outputs, kinetic_ratio
+from fabmd.protocols.driven_outputs import Outputs, kinetic_ratio, kinetic_to_work_ratio
 from fabmd.protocols.verdict import add_interval_verdict
 from fabmd.scene import blocks
 from fabmd.scene.energy import ContactEnergy, ContactPower, balance
@@ -194,6 +194,9 @@ def test_ke_over_u_takes_the_kinetic_energy_relative_to_the_affine_field(tmp_pat
                    "kinetic_relative_j": c["kinetic_relative_j"]}, {}, c["external_work_j"],
                   c["damping_dissipation_j"], None, c["contact_energy_j"])
     assert kinetic_ratio(out, np.ones(41, bool)) == pytest.approx(0.0005)
+    started = c["x"] > 0
+    ratio = c["kinetic_relative_j"][started] / c["external_work_j"][started]
+    assert kinetic_to_work_ratio(out, started) == pytest.approx(ratio.max())
 
 
 @pytest.mark.lammps

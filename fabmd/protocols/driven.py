@@ -84,10 +84,11 @@ ELASTIC_NOTE = {True: "U = bond strain energy + the contacts' elastic energy (no
                        "by the in-process back end only, or a sample's pairs did not line "
                        "up)"}
 
-#: which kinetic energy KE/U counts (summary ``kinetic_energy``; the inertia measures keep
-#: the absolute one): relative to the tools' affine field where the test has one
-KINETIC_NOTE = {True: "KE of KE/U relative to the tools' affine velocity field (what they "
-                      "carry along is not counted); inertia share and KE/work: absolute KE",
+#: which kinetic energy KE/U and KE/work count (summary ``kinetic_energy``; the inertia share
+#: keeps the absolute one): relative to the tools' affine field where the test has one
+KINETIC_NOTE = {True: "KE of KE/U and KE/work relative to the tools' affine velocity field "
+                      "(what they carry along is not counted); the per-interval inertia "
+                      "share |dKE|/dW: absolute KE",
                 False: "KE of KE/U: absolute (the test has no affine field)"}
 
 

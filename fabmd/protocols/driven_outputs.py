@@ -104,9 +104,12 @@ def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
 
 
 def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic energy / external work done so far, after start-up (None when no
-    started sample has work done)."""
-    return _largest_ratio(out["kinetic_j"][started], out.external_work_j[started])
+    """Largest kinetic energy / external work done so far, after start-up, KE relative to
+    the tools' affine field where the curve has it (as :func:`kinetic_ratio`: the
+    carriage's force is the per-interval inertia share's business; None when no started
+    sample has work done)."""
+    ke = out.columns.get("kinetic_relative_j", out["kinetic_j"])
+    return _largest_ratio(ke[started], out.external_work_j[started])
 
 
 STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "
