@@ -104,8 +104,9 @@ def hand_sum(pos, n, kn) -> float:
 
 @pytest.mark.lammps
 def test_a_crossing_holds_half_kn_delta_squared_per_pair(tmp_path):
-    """A crossing of two families (the law's crossing stiffness, no table energy) and the
-    same crossing with the plain Hooke contact (gran/hooke/history): U_c = Σ ½k_nδ²."""
+    """A crossing of two families (the law's crossing stiffness, no table energy), the
+    same crossing with the plain Hooke contact (gran/hooke/history) and with the split
+    contact (granular, per type pair): U_c = Σ ½k_nδ² with the pair's own k_n."""
     model, b, pos, n = crossing(0.15)
     contact = law_contact()
     kn = contact.normal_stiffness_n_per_m([b])
@@ -116,6 +117,14 @@ def test_a_crossing_holds_half_kn_delta_squared_per_pair(tmp_path):
     u1 = sample_energy(tmp_path, "hooke", model1, plain, b1)
     assert plain.pair_style() == "gran/hooke/history"
     assert u1 == pytest.approx(hand_sum(pos1, n, plain.normal_stiffness_n_per_m([b1])),
+                               rel=1e-9)
+    # the split contact (pair_style granular, per type pair): crossing and same-family k_n
+    split = ContactModel(friction=0.3, within_family_stiffness_pa=1e6)
+    assert split.pair_style() == "granular"
+    u2 = sample_energy(tmp_path, "split_cross", model, split, b)
+    assert u2 == pytest.approx(hand_sum(pos, n, split.normal_stiffness_n_per_m([b])), rel=1e-9)
+    u3 = sample_energy(tmp_path, "split_same", model1, split, b1)
+    assert u3 == pytest.approx(hand_sum(pos1, n, split.within_family_stiffness_n_per_m([b1])),
                                rel=1e-9)
 
 
