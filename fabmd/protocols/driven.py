@@ -51,7 +51,13 @@ from ..results.plots import plot_curves
 from ..scene import blocks
 from ..scene.drag import DRAG_KINDS, AffineField, drag_commands
 from ..scene.drag import damping_power as drag_power
-from ..scene.energy import MEAN_SAMPLE_EVERY, MEAN_SAMPLING_FROM, ContactPower, mean_sample_every
+from ..scene.energy import (
+    MEAN_SAMPLE_EVERY,
+    MEAN_SAMPLING_FROM,
+    ContactEnergy,
+    ContactPower,
+    mean_sample_every,
+)
 from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
@@ -69,6 +75,21 @@ from .driven_outputs import (
 from .verdict import QUASI_STATIC_LIMITS, judge
 from .verdict import quasi_static_verdict as quasi_static_verdict  # its old home
 from .verdict import start_spike_ratio as start_spike_ratio  # its old home
+
+#: what U of the KE/U measures counts (summary ``elastic_energy``): with the contacts'
+#: elastic energy sampled (in-process) or not (standalone)
+ELASTIC_NOTE = {True: "U = bond strain energy + the contacts' elastic energy (normal springs "
+                      "and the within-family law; tangential springs left out)",
+                False: "U = bond strain energy only (the contacts' elastic energy is sampled "
+                       "by the in-process back end only, or a sample's pairs did not line "
+                       "up)"}
+
+#: which kinetic energy KE/U and KE/work count (summary ``kinetic_energy``; the inertia share
+#: keeps the absolute one): relative to the tools' affine field where the test has one
+KINETIC_NOTE = {True: "KE of KE/U and KE/work relative to the tools' affine velocity field "
+                      "(what they carry along is not counted); the per-interval inertia "
+                      "share |dKE|/dW: absolute KE",
+                False: "KE of KE/U: absolute (the test has no affine field)"}
 
 
 @dataclass
@@ -130,9 +151,10 @@ class DrivenTest:
     #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
     interval_axis: ClassVar[tuple[str, float] | None] = None
     #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
-    quasi_static_note: ClassVar[str] = ("kinetic energy over the bond strain energy and over "
-                                        "the work done so far, after the smooth start and "
-                                        "the first tenth of the test")
+    quasi_static_note: ClassVar[str] = ("kinetic energy over the elastic energy (bonds and "
+                                        "contacts: elastic_energy) and over the work done "
+                                        "so far, after the smooth start and the first tenth "
+                                        "of the test")
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -150,8 +172,12 @@ class DrivenTest:
         """The model the run starts from (validated; a protocol may add bond types)."""
         return model
 
-    def make_monitor(self) -> ContactPower:
-        return ContactPower(self.contact.pair_style())
+    def make_monitor(self, model: BeadModel | None = None) -> ContactPower:
+        """The contact-power monitor; on ``model`` it samples the contacts' elastic energy
+        too (:class:`~fabmd.scene.energy.ContactEnergy`)."""
+        energy = None if model is None else ContactEnergy.for_contact(
+            self.contact, model_bead_parameters(model), model.family_names)
+        return ContactPower(self.contact.pair_style(), energy)
 
     def quasi_static_evidence(self, out: Outputs, model: BeadModel, progress: np.ndarray,
                               work_ratio: bool = True) -> dict:
@@ -164,7 +190,9 @@ class DrivenTest:
         if work_ratio:
             evidence["max_kinetic_to_external_work"] = kinetic_to_work_ratio(out, started)
         note = self.quasi_static_note if work_ratio else STARTED_NOTE
-        evidence.update(quasi_static_note=note, energy_balance=energy_balance(out))
+        evidence.update(quasi_static_note=note, energy_balance=energy_balance(out),
+                        elastic_energy=ELASTIC_NOTE[out.contact_energy_measured],
+                        kinetic_energy=KINETIC_NOTE["kinetic_relative_j" in out.columns])
         return evidence
 
     # -- loading and time ------------------------------------------------------------
@@ -298,6 +326,7 @@ class DrivenTest:
             blocks.contact(model, self.contact, beads),
             protocol_text,
             ContactPower.commands(self.contact.pair_style()),
+            ContactEnergy.commands(),
             *after,
         ])
 
@@ -318,23 +347,32 @@ class DrivenTest:
     def outputs_block(self, model: BeadModel, external_power: str, external_ref: str,
                       mean_values: str = "", mean_names: str = "", print_values: str = "",
                       print_names: str = "", thermo_values: str = "",
-                      damping_power: str | None = None) -> str:
+                      damping_power: str | None = None,
+                      affine: AffineField | None = None) -> str:
         """Interval means, printed curve and thermo (``driven_outputs.lmp``);
         ``damping_power``: LAMMPS text defining ``v_p_damp``, the drag's power on the free
         beads (:func:`fabmd.scene.drag.damping_power`; default: that of a drag γ·v on the
-        absolute velocity)."""
+        absolute velocity); ``affine``: the tools' affine velocity field, whose relative
+        kinetic energy the curve then prints too (``kinetic_relative_j``,
+        ``kinetic_relative.lmp``)."""
+        block = ""
+        if affine is not None:
+            block = render("kinetic_relative", tools=affine.tools, affine_vx=affine.vx,
+                           affine_vy=affine.vy)
+            print_values = f"{print_values} ${{ke_rel}}".strip()
+            print_names = f"{print_names} kinetic_relative_j".strip()
         every = self.every(model)
         sample_every = mean_sample_every(every)
         strain = "ebond+eangle" if len(model.angles) else "ebond"
         if damping_power is None:
             damping_power = drag_power("free", self.gamma(model))
-        return render("driven_outputs", external_power=external_power, strain_energy=strain,
-                      external_ref=external_ref, damping_power=damping_power, every=every,
-                      sample_every=sample_every, samples=every // sample_every,
-                      mean_values=mean_values, mean_names=mean_names,
-                      print_values=print_values, print_names=print_names,
-                      thermo_values=thermo_values,
-                      thermo_every=max(every, self.steps(model) // 20))
+        return block + render(
+            "driven_outputs", external_power=external_power, strain_energy=strain,
+            external_ref=external_ref, damping_power=damping_power, every=every,
+            sample_every=sample_every, samples=every // sample_every,
+            mean_values=mean_values, mean_names=mean_names, print_values=print_values,
+            print_names=print_names, thermo_values=thermo_values,
+            thermo_every=max(every, self.steps(model) // 20))
 
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
@@ -355,7 +393,7 @@ class DrivenTest:
                                   {self.protocol: scene_dict(self)}, overwrite, resume,
                                   plan=self.plan(start), files=blocks.contact_files(
                                       self.contact, model_bead_parameters(start)))
-        monitor = monitor or self.make_monitor()
+        monitor = monitor or self.make_monitor(start)
         run, trajectory = run_with_trajectory(engine, run_dir, self.protocol, self.trajectory,
                                               start, resume, monitor=monitor,
                                               monitor_every=self.every(start))
@@ -416,8 +454,10 @@ class ClampedTest(RelaxedDrivenTest):
     drag: str = "affine"
 
     quasi_static_note = (
-        "kinetic energy of the free fabric over the bond strain energy and over the work "
-        "done so far, after the smooth start and the first tenth of the displacement")
+        "kinetic energy of the free fabric (relative to the clamps' or frame's affine field: "
+        "kinetic_energy) over the elastic energy (bonds and contacts: elastic_energy) and "
+        "over the work done so far, after the smooth start and the first tenth of the "
+        "displacement")
 
     @staticmethod
     def clamp_edges(x: np.ndarray, low_m: float, high_m: float) -> tuple[float, float]:

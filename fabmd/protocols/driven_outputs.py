@@ -28,9 +28,23 @@ class Outputs:
     external_work_j: np.ndarray
     damping_j: np.ndarray
     contact_j: np.ndarray | None
+    #: the contacts' elastic energy U_c at the curve's steps (None: not sampled)
+    contact_energy_j: np.ndarray | None = None
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
+
+    @property
+    def contact_energy_measured(self) -> bool:
+        """Was the contacts' elastic energy sampled at every output (in-process)?"""
+        return self.contact_energy_j is not None and bool(
+            np.all(np.isfinite(self.contact_energy_j)))
+
+    @property
+    def elastic_energy_j(self) -> np.ndarray:
+        """U = bond strain energy + the contacts' elastic energy where sampled [J]."""
+        u = self["strain_energy_j"]
+        return u + self.contact_energy_j if self.contact_energy_measured else u
 
 
 def read_outputs(run_dir: Path, every: int, dt: float,
@@ -46,7 +60,8 @@ def read_outputs(run_dir: Path, every: int, dt: float,
     damping = np.interp(raw["step"], means["step"],
                         cumulative(means["damping_power_w"], every, dt), left=0.0)
     contact = monitor.work_j(raw["step"], dt) if monitor is not None else None
-    return Outputs(raw, means, external, damping, contact)
+    elastic = monitor.elastic_energy_j(raw["step"]) if monitor is not None else None
+    return Outputs(raw, means, external, damping, contact, elastic)
 
 
 def energy_columns(out: Outputs) -> dict[str, np.ndarray]:
@@ -55,13 +70,18 @@ def energy_columns(out: Outputs) -> dict[str, np.ndarray]:
             "external_work_j": out.external_work_j, "damping_dissipation_j": out.damping_j}
     if out.contact_j is not None:
         cols["contact_work_j"] = out.contact_j
+    if out.contact_energy_j is not None:
+        cols["contact_energy_j"] = out.contact_energy_j
+    if "kinetic_relative_j" in out.columns:  # relative to the tools' affine field
+        cols["kinetic_relative_j"] = out["kinetic_relative_j"]
     return cols
 
 
 def energy_balance(out: Outputs) -> dict:
-    """External work = Δ strain + Δ kinetic + damping + contact work, closing error."""
+    """External work = Δ strain + Δ kinetic + damping + contact work, closing error (the
+    contact work split into ΔU_c and the rest where U_c was sampled)."""
     return balance(out.external_work_j, out["strain_energy_j"], out["kinetic_j"],
-                   out.damping_j, out.contact_j)
+                   out.damping_j, out.contact_j, out.contact_energy_j)
 
 
 def _largest_ratio(numerator: np.ndarray, denominator: np.ndarray) -> float | None:
@@ -75,15 +95,21 @@ def _largest_ratio(numerator: np.ndarray, denominator: np.ndarray) -> float | No
 
 
 def kinetic_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic / strain energy after start-up (None when nothing is started or
-    no started sample has strain energy)."""
-    return _largest_ratio(out["kinetic_j"][started], out["strain_energy_j"][started])
+    """Largest kinetic / elastic energy after start-up: KE relative to the tools' affine
+    field where the curve has it (``kinetic_relative_j``), U = bonds + contacts where the
+    contacts' energy was sampled (None when nothing is started or no started sample has
+    elastic energy)."""
+    ke = out.columns.get("kinetic_relative_j", out["kinetic_j"])
+    return _largest_ratio(ke[started], out.elastic_energy_j[started])
 
 
 def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
-    """Largest kinetic energy / external work done so far, after start-up (None when no
-    started sample has work done)."""
-    return _largest_ratio(out["kinetic_j"][started], out.external_work_j[started])
+    """Largest kinetic energy / external work done so far, after start-up, KE relative to
+    the tools' affine field where the curve has it (as :func:`kinetic_ratio`: the
+    carriage's force is the per-interval inertia share's business; None when no started
+    sample has work done)."""
+    ke = out.columns.get("kinetic_relative_j", out["kinetic_j"])
+    return _largest_ratio(ke[started], out.external_work_j[started])
 
 
 STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "

@@ -289,16 +289,18 @@ class PictureFrame(ClampedTest):
         ea = max(bt.bond_axial_stiffness_n for bt in model.fibre_bond_types())
         ref_force = max(self.pretension_strain, 1e-3) * ea
         power, power_ref = clamp_power("clamps")
-        damping, damping_power = self.drag_block(model, AffineField(
+        field = AffineField(
             origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xx="v_frame_lxx",
-            xy="v_frame_lxy", yx="v_frame_lxy", yy="v_frame_lxx", tools="frame"))
+            xy="v_frame_lxy", yx="v_frame_lxy", yy="v_frame_lxx", tools="frame")
+        damping, damping_power = self.drag_block(model, field)
         adaptive = self.loading_speed.adaptive
         outputs = self.outputs_block(
             model, power, power_ref,
             print_values="${d} ${shear_deg} ${dd}" if adaptive else "${d} ${shear_deg}",
             print_names="displacement_m shear_angle_lammps_deg corner_speed_m_s" if adaptive
             else "displacement_m shear_angle_lammps_deg",
-            thermo_values="v_d v_shear_deg c_p_ext", damping_power=damping_power)
+            thermo_values="v_d v_shear_deg c_p_ext", damping_power=damping_power,
+            affine=field)
         motion = {"displacement": load.lammps_displacement(),
                   "velocity": load.lammps_velocity(),
                   "displacement_next": load.lammps_displacement("t_next"),

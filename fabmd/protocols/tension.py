@@ -133,9 +133,9 @@ class Tension(EndClampedTest):
         power, power_ref = rigid_clamp_power()
         # the clamps' inner edges at x_left - u and x_right + u move at -v and +v: the
         # fabric between them stretches affinely along x
-        damping, damping_power = self.drag_block(model, AffineField(
-            origin_m=(0.5 * (left + right), 0.0), xx=f"2*v_v/({fmt(right - left)}+2*v_u)",
-            tools="clamps"))
+        field = AffineField(origin_m=(0.5 * (left + right), 0.0),
+                            xx=f"2*v_v/({fmt(right - left)}+2*v_u)", tools="clamps")
+        damping, damping_power = self.drag_block(model, field)
         adaptive = self.loading_speed.adaptive
         gauge = self.gauge_fraction is not None
         outputs = self.outputs_block(
@@ -146,7 +146,7 @@ class Tension(EndClampedTest):
             print_names=("clamp_displacement_m clamp_speed_m_s" if adaptive
                          else "clamp_displacement_m") + (" gauge_distance_m" if gauge else ""),
             thermo_values="v_u v_v c_f_left c_f_right" if adaptive
-            else "v_u c_f_left c_f_right", damping_power=damping_power)
+            else "v_u c_f_left c_f_right", damping_power=damping_power, affine=field)
         displacement, velocity = load.lammps_displacement(), load.lammps_velocity()
         moves = ("v_u", "v_u_neg")
         if adaptive:  # the clamps integrate the speed; u is read back from them

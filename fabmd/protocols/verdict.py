@@ -115,14 +115,29 @@ def start_spike_ratio(force, fraction: float = 0.05) -> float | None:
     return early / max(later, 1e-300) if early > 0 else 0.0
 
 
+def elastic_energy_j(curve: dict) -> np.ndarray:
+    """U of KE/U [J]: the bonds' strain energy plus the contacts' elastic energy
+    (``contact_energy_j``, where the run sampled it: in-process; a standalone run has
+    bonds only). Most of a sheared fabric's elastic energy sits in lateral compaction,
+    in the contacts (benchmarks/RESULTS.md "Contact energy in the verdict")."""
+    u = np.asarray(curve["strain_energy_j"], float)
+    contact = curve.get("contact_energy_j")
+    if contact is None or not np.all(np.isfinite(contact)):
+        return u
+    return u + np.asarray(contact, float)
+
+
 def add_interval_verdict(result: DrivenResult, column: str, width: float) -> dict:
     """Judge ``result``'s curve per interval of ``column`` (:func:`~fabmd.scene.
     quasi_static.interval_verdict`): the verdict goes into the summary
-    (``quasi_static_intervals``), its per-sample columns into the curve."""
+    (``quasi_static_intervals``), its per-sample columns into the curve. KE/U takes the
+    kinetic energy relative to the tools' affine field where the curve has it
+    (``kinetic_relative_j``: picture frame, tension, bias extension) and U =
+    :func:`elastic_energy_j`."""
     c = result.curve
     verdict = interval_verdict(c[column], c["external_work_j"], c["damping_dissipation_j"],
-                               c["kinetic_energy_j"], c["strain_energy_j"], width,
-                               name=column)
+                               c["kinetic_energy_j"], elastic_energy_j(c), width,
+                               name=column, relative_kinetic_j=c.get("kinetic_relative_j"))
     result.summary["quasi_static_intervals"] = verdict
     result.curve.update(interval_columns(c[column], verdict))
     return verdict

@@ -12,7 +12,14 @@ elastic energy). Every term is measured on its own:
   contact pair, summed from ``compute pair/local`` between chunks of the
   in-process run (sampled; not available in the standalone back end). It includes
   what friction and contact damping dissipate and the elastic energy the contacts
-  hold (no pair style here reports a contact energy).
+  hold;
+* contact elastic energy U_c (:class:`ContactEnergy`, sampled with the contact power at
+  the output steps, in-process only): the normal springs' ½·k_n·δ² of every overlapping
+  pair (Hertz: 0.4·k_n·sqrt(R_eff)·δ^2.5) plus the pair style's own energy (the
+  within-family law's table part; the granular styles report none). The balance splits
+  the contact work into ΔU_c and what the contacts dissipated; the quasi-static verdict
+  judges KE/U with U = bonds + U_c. The tangential springs' energy is left out (the
+  granular styles do not report it, and under hybrid/overlay not even their force).
 
 ``pair_style granular`` (the split contact) reports forces but no relative velocities
 in ``pair/local``: its contact power pairs the forces with the velocities of the two
@@ -70,11 +77,14 @@ class ContactPower:
     compute_id = "fabmd_contacts"
     atoms_id = "fabmd_contact_atoms"
 
-    def __init__(self, pair_style: str = "gran/hooke/history"):
+    def __init__(self, pair_style: str = "gran/hooke/history",
+                 energy: ContactEnergy | None = None):
         self.granular = pair_style == "granular"
         self.measured = not pair_style.startswith("hybrid")  # module docstring
+        self.energy = energy  # also sample the contacts' elastic energy (None: not)
         self.steps: list[int] = []
         self.power_w: list[float] = []
+        self.energy_j: list[float] = []
 
     @classmethod
     def commands(cls, pair_style: str = "gran/hooke/history") -> str:
@@ -92,12 +102,17 @@ class ContactPower:
             local = float("nan")
         else:
             local = self._granular_power(lmp) if self.granular else self._gran_power(lmp)
-        total = mpi.allreduce_sum([local])[0]
+        if self.energy is None:
+            total = mpi.allreduce_sum([local])[0]
+        else:
+            total, elastic = mpi.allreduce_sum([local, self.energy.local_energy_j(lmp)])
         step = int(lmp.extract_global("ntimestep"))
         if self.steps and step <= self.steps[-1]:  # the clock was reset: a new phase
-            self.steps, self.power_w = [], []
+            self.steps, self.power_w, self.energy_j = [], [], []
         self.steps.append(step)
         self.power_w.append(total)
+        if self.energy is not None:
+            self.energy_j.append(elastic)
 
     @classmethod
     def _local(cls, lmp, compute_id: str, columns: int) -> np.ndarray:
@@ -145,12 +160,22 @@ class ContactPower:
 
     def state(self) -> dict:
         """Samples so far (saved with a checkpoint)."""
-        return {"steps": list(self.steps), "power_w": list(self.power_w)}
+        return {"steps": list(self.steps), "power_w": list(self.power_w),
+                "energy_j": list(self.energy_j)}
 
     def restore(self, state: dict) -> None:
         """Continue from a checkpoint's samples."""
         self.steps = [int(s) for s in state["steps"]]
         self.power_w = [float(p) for p in state["power_w"]]
+        self.energy_j = [float(e) for e in state.get("energy_j", [])]
+
+    def elastic_energy_j(self, steps: np.ndarray) -> np.ndarray | None:
+        """Contact elastic energy U_c at ``steps`` [J] (:class:`ContactEnergy`; None if not
+        sampled). Sampled at the output steps from the first one after step 0: step 0
+        takes the first sample's value."""
+        if self.energy is None or not self.energy_j or len(self.energy_j) != len(self.steps):
+            return None
+        return np.interp(steps, np.asarray(self.steps, float), np.asarray(self.energy_j))
 
     def work_j(self, steps: np.ndarray, dt: float) -> np.ndarray | None:
         """Cumulative work taken by the contacts at ``steps`` [J] (None if not sampled)."""
@@ -160,6 +185,90 @@ class ContactPower:
         p = -np.asarray(self.power_w)  # power going into the contacts
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * np.diff(s) * dt)])
         return np.interp(steps, s, cum, left=0.0)
+
+
+class ContactEnergy:
+    """Elastic energy held by the fibre–fibre contacts [J], sampled between chunks.
+
+    Per overlapping pair (``compute pair/local dist eng`` and ``property/local patom1
+    patom2``, ``lammps_templates/contact_energy.lmp``), with δ = r_i + r_j − r:
+    ½·k_n·δ² of the Hooke normal spring (Hertz: 0.4·k_n·sqrt(R_eff)·δ^2.5,
+    R_eff = r_i·r_j/(r_i + r_j), as LAMMPS's hertz force k_n·δ·sqrt(δ·R_eff)), k_n of the
+    pair's two atom types, plus the pair style's own energy (``eng``: the table's part of
+    the within-family law, the integral of its excess force from the cutoff; 0 for the
+    granular styles). The tangential springs are left out (module docstring). A sample whose
+    rows do not line up (a distance no image of the pair's atoms has) is NaN.
+
+    Args:
+        stiffness_n_per_m: k_n [N/m] by atom type pair, a symmetric (types + 1)² array
+            (row and column 0 unused).
+        hertz: the normal force is Hertz (else Hooke).
+    """
+
+    pairs_id = "fabmd_contact_gaps"
+    atoms_id = "fabmd_contact_gap_atoms"
+
+    def __init__(self, stiffness_n_per_m, hertz: bool = False):
+        self.stiffness = np.asarray(stiffness_n_per_m, float)
+        self.hertz = hertz
+
+    @classmethod
+    def for_contact(cls, contact, beads, families: tuple[str, ...]) -> ContactEnergy:
+        """The energy of ``contact`` (a :class:`~fabmd.model.contact.ContactModel`) on a
+        model with ``beads`` and one atom type per family in ``families``."""
+        n = len(families)
+        k = np.zeros((n + 1, n + 1))
+        if contact.split:
+            for i, j, c in contact.type_pair_coefficients(beads, n, families):
+                k[i, j] = k[j, i] = c["kn"]
+        else:
+            k[1:, 1:] = contact.pair_coefficients(beads)["kn"]
+        return cls(k, hertz=contact.normal == "hertz")
+
+    @classmethod
+    def commands(cls) -> str:
+        """LAMMPS text of the sampling computes (evaluated only when sampled)."""
+        return render("contact_energy", pairs_id=cls.pairs_id,
+                      atoms_id=cls.atoms_id).removesuffix("\n")
+
+    def pair_energy_j(self, overlap_m, radius_i_m, radius_j_m, type_i, type_j) -> np.ndarray:
+        """The normal springs' energy of pairs with overlaps δ [m] (arrays) [J]."""
+        k = self.stiffness[np.asarray(type_i), np.asarray(type_j)]
+        d = np.maximum(np.asarray(overlap_m, float), 0.0)
+        if self.hertz:
+            r_eff = radius_i_m * radius_j_m / (radius_i_m + radius_j_m)
+            return 0.4 * k * np.sqrt(r_eff) * d**2.5
+        return 0.5 * k * d * d
+
+    def local_energy_j(self, lmp) -> float:
+        """U_c of the pairs this rank holds [J] (NaN when the rows do not line up)."""
+        pairs = ContactPower._local(lmp, self.pairs_id, 2)
+        tags = ContactPower._local(lmp, self.atoms_id, 2).astype(np.int64)
+        if len(pairs) != len(tags):
+            return float("nan")
+        if not len(pairs):
+            return 0.0
+        nlocal = int(lmp.extract_global("nlocal"))
+        nall = nlocal + int(lmp.extract_global("nghost"))
+        tag = np.asarray(lmp.numpy.extract_atom("id", nelem=nall), np.int64).reshape(-1)
+        x = np.asarray(lmp.numpy.extract_atom("x", nelem=nall), float).reshape(-1, 3)
+        radius = np.asarray(lmp.numpy.extract_atom("radius", nelem=nall), float).reshape(-1)
+        kind = np.asarray(lmp.numpy.extract_atom("type", nelem=nall), np.int64).reshape(-1)
+        owned, found = _candidates(tag[:nlocal], tags[:, 0])
+        i = owned[:, 0]
+        cand, valid = _candidates(tag, tags[:, 1])
+        dist = pairs[:, 0]
+        # the image of j at the reported distance: the rows describe these pairs
+        miss = np.abs(np.linalg.norm(x[i][:, None, :] - x[cand], axis=2) - dist[:, None])
+        miss[~(valid & found[:, :1])] = np.inf
+        best = np.argmin(miss, axis=1)
+        rows = np.arange(len(pairs))
+        if np.any(miss[rows, best] > 1e-6 * (radius[i] + radius[cand[rows, best]])):
+            return float("nan")
+        j = cand[rows, best]
+        spring = self.pair_energy_j(radius[i] + radius[j] - dist, radius[i], radius[j],
+                                    kind[i], kind[j])
+        return float(np.sum(spring) + np.sum(pairs[:, 1]))
 
 
 def _candidates(tag: np.ndarray, wanted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -188,13 +297,24 @@ UNMEASURED_NOTE = ("energy balance not measured: the contact work could not be s
                    "quasi-static verdict does not judge the energy balance")
 
 
-def balance(external_j, strain_j, kinetic_j, damping_j, contact_j) -> dict:
-    """Energy balance at the end of a run: the terms and the relative closing error."""
+def balance(external_j, strain_j, kinetic_j, damping_j, contact_j,
+            contact_energy_j=None) -> dict:
+    """Energy balance at the end of a run: the terms and the relative closing error.
+
+    ``contact_energy_j``: the contacts' elastic energy U_c at the samples (None: not
+    sampled); the contact work is then split into ``contact_energy_change_j`` (ΔU_c) and
+    ``contact_dissipation_j`` (friction and contact damping: the rest), which does not
+    change the closing error."""
     terms = {"external_work_j": float(external_j[-1]),
              "strain_energy_change_j": float(strain_j[-1] - strain_j[0]),
              "kinetic_energy_change_j": float(kinetic_j[-1] - kinetic_j[0]),
              "damping_dissipation_j": float(damping_j[-1]),
              "contact_work_j": None if contact_j is None else float(contact_j[-1])}
+    if contact_energy_j is not None and np.all(np.isfinite(contact_energy_j)):
+        terms["contact_energy_change_j"] = float(contact_energy_j[-1] - contact_energy_j[0])
+        if contact_j is not None and np.all(np.isfinite(contact_j)):
+            terms["contact_dissipation_j"] = (terms["contact_work_j"]
+                                              - terms["contact_energy_change_j"])
     if contact_j is None:
         terms["relative_error"] = None
         terms["note"] = ("contact work is sampled by the in-process back end only; "

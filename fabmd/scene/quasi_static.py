@@ -129,7 +129,8 @@ INTERVAL_LIMITS = {"damping_share": 0.1, "inertia_share": 0.1,
 
 
 def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: float,
-                     limits: dict[str, float] | None = None, name: str = "x") -> dict:
+                     limits: dict[str, float] | None = None, name: str = "x",
+                     relative_kinetic_j=None) -> dict:
     """Judge a driven test's curve interval by interval.
 
     The range of ``x`` (the test's progress: shear angle [deg], elongation [%];
@@ -138,7 +139,12 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
     * ``damping_share`` = ΔW_drag / ΔW_external: the drag's share of the work done in it;
     * ``inertia_share`` = |ΔKE| / ΔW_external: the share that went into kinetic energy;
     * ``kinetic_to_strain_energy``: the largest KE / U at the samples in it, U no less
-      than 1 % of the run's largest strain energy (a slack start has almost none).
+      than 1 % of the run's largest (a slack start has almost none). ``strain_j`` is the
+      elastic energy U: the bonds' plus, where sampled, the contacts' (the driven tests
+      pass both: :func:`fabmd.protocols.verdict.elastic_energy_j`). KE is
+      ``relative_kinetic_j`` where given: the kinetic energy relative to the tools' affine
+      velocity field (what the tools carry along is not a dynamic error; the inertia
+      share keeps the absolute KE, whose growth the tools pay for).
 
     The cumulative works are read at the interval's ends by interpolation. A share
     whose interval took no external work (|ΔW| below 1e-9 of the run's) is not
@@ -155,6 +161,7 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
     x = np.asarray(x, float)
     w_ext, w_drag, ke, u = (np.asarray(a, float) for a in (external_work_j, damping_j,
                                                             kinetic_j, strain_j))
+    ke_u = ke if relative_kinetic_j is None else np.asarray(relative_kinetic_j, float)
     if width <= 0:
         raise ValueError(f"interval width must be > 0, got {width}")
     top = float(x.max())
@@ -173,8 +180,8 @@ def interval_verdict(x, external_work_j, damping_j, kinetic_j, strain_j, width: 
         ddrag = float(np.diff(np.interp([a, b], x, w_drag))[0])
         dke = float(np.diff(np.interp([a, b], x, ke))[0])
         inside = (x >= a) & (x <= b)
-        at = np.interp([a, b], x, ke), np.interp([a, b], x, u)
-        kes = np.concatenate([ke[inside], at[0]])
+        at = np.interp([a, b], x, ke_u), np.interp([a, b], x, u)
+        kes = np.concatenate([ke_u[inside], at[0]])
         us = np.concatenate([u[inside], at[1]])
         measures = {
             "damping_share": ddrag / dw if abs(dw) > floor else None,
