@@ -19,9 +19,9 @@ the whole coupon is the sheared area). With ``clamp_yarns`` the clamps hold whol
 move with the frame and store nothing (their mutual bonds and contacts are removed), so
 the free square is the area that shears. The shear-locking angle
 (:func:`fabmd.results.curves.locking_angle`): a line fitted to F_norm over a fixed
-initial range past the start-up (10–20°), the departure where F_norm stays above twice that line for 5°,
-and the tangent over those 5° meeting the initial line; it does not depend on where
-the test stops.
+initial range past the start-up (10–20°), the departure where F_norm stays above
+twice that line for 5°, and the tangent over those 5° meeting the initial line; it
+does not depend on where the test stops.
 
 ``pretension_strain`` is a clamping preload: the rest length of the bonds of the
 unclamped fibres shrinks by that strain (ramped, clamps held) before the free
