@@ -182,6 +182,13 @@ def _picture_frame(protocol, coupon, sec, fail, fabric) -> None:
     if clamp is not None and clamp >= 0.35 * side:
         raise fail(f"[{sec}] clamp_width_m = {_mm(clamp)} leaves too little free fabric on a "
                    f"{_mm(side)} coupon; set clamp_width_m <= {_mm(0.35 * side)}")
+    held = protocol.clamp_yarns
+    for fam in ("warp", "weft") if held is not None else ():
+        yarns = int(round(side / fabric.spacing(fam)))  # whole-yarn clamps leave 2 free
+        if yarns < 2 * int(held) + 2:
+            raise fail(f"[{sec}] clamp_yarns = {int(held)} holds {2 * int(held)} of the "
+                       f"{yarns} {fam} yarns of a {_mm(side)} coupon and leaves fewer than 2 "
+                       f"free; set clamp_yarns <= {max(yarns // 2 - 1, 0)} or a larger coupon")
 
 
 def _drape(protocol, coupon, sec, fail, fabric) -> None:

@@ -98,6 +98,64 @@ def test_bad_frames_are_refused():
         PictureFrame().prepare(turned)
 
 
+@pytest.fixture(scope="module")
+def twintex_cell():
+    """The validation fabric's as-woven periodic cell (7 fibres per yarn, 2 ends x 2 picks;
+    seconds, no LAMMPS)."""
+    from pathlib import Path
+
+    from fabmd.scenefile import load_scene
+    from fabmd.stages import periodic_cell
+
+    root = Path(__file__).resolve().parents[1]
+    return periodic_cell(load_scene(root / "examples" / "twintex_plain.toml"))
+
+
+def yarn_across(model, frame):
+    """Per yarn: (family, its beads' coordinates across its length, the clamp edges on
+    that axis)."""
+    x_lo, x_hi, y_lo, y_hi = frame.inner
+    out = []
+    for y in np.unique(model.yarn_ids):
+        beads = model.yarn_ids == y
+        p = model.positions[beads]
+        along_x = np.ptp(p[:, 0]) > np.ptp(p[:, 1])
+        out.append((p[:, 1], (y_lo, y_hi)) if along_x else (p[:, 0], (x_lo, x_hi)))
+    return out
+
+
+@pytest.mark.parametrize("cells", [2, 3])
+def test_whole_yarn_clamps_hold_the_same_whole_yarns_at_every_size(twintex_cell, cells):
+    from fabmd.model.transform import tile
+
+    square = tile(twintex_cell, cells, cells, periodic=False)
+    spacing = float(twintex_cell.box_hi[0] - twintex_cell.box_lo[0]) / 2
+    frame = PictureFrame(clamp_yarns=1).frame(square)
+    held = free = 0
+    for across, (lo, hi) in yarn_across(square, frame):
+        inside = (across > lo) & (across < hi)
+        assert inside.all() or not inside.any()  # no clamp edge runs through a yarn
+        held += not inside.any()
+        free += inside.all()
+    assert held == 4 and free == 4 * cells - 4  # one whole yarn under each clamp
+    # the free square is a whole number of yarn spacings (gap centre to gap centre) and
+    # F_norm is per its area
+    assert frame.free_side_m == pytest.approx((2 * cells - 2) * spacing, rel=1e-3)
+    assert frame.sheared_side_m == frame.free_side_m
+    default = PictureFrame().frame(square)
+    assert default.sheared_side_m == default.fabric_length_m
+
+
+def test_too_many_whole_yarns_are_refused(twintex_cell):
+    from fabmd.model.transform import tile
+
+    square = tile(twintex_cell, 2, 2, periodic=False)
+    with pytest.raises(InputError, match="clamp_yarns = 2 holds 4 of the 4 yarns"):
+        PictureFrame(clamp_yarns=2).frame(square)
+    with pytest.raises(InputError, match="clamp_yarns must be an integer"):
+        PictureFrame(clamp_yarns=0)
+
+
 # -- LAMMPS runs ---------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def as_woven(tmp_path_factory):

@@ -123,6 +123,9 @@ coupon = { length_m = "30 mm", width_m = "30 mm" }"""
      "set [fabric] tiling = [3, 2]"),
     ("picture-frame", with_table("picture_frame", PICTURE_FRAME),
      "needs a square coupon"),
+    ("picture-frame", with_table("picture_frame", "[picture_frame]\nclamp_yarns = 2\n"
+                                 "coupon = { cells = [2, 2] }"),
+     "clamp_yarns = 2 holds 4 of the 4 warp yarns"),
     ("drape", with_table("drape", DRAPE), "needs a blank at least"),
     ("drape", with_table("drape", DRAPE.replace('"30 mm"', '"60 mm"')
                          + '\ndie_clearance_m = "0.01 mm"'), "raise die_clearance_m"),

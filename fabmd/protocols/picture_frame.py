@@ -14,11 +14,14 @@ follows from the power balance F·ḋ = −Σ_clamped f·v, integrated exactly o
 output interval: F = ΔW/Δd. Reported the standard way (Harrison et al. 2004):
 F_s = F/(2 cos θ) and F_norm = F_s·L_frame/L_fabric², L_fabric the side of the
 fabric in the frame (in this model the clamped strips shear with the frame, so
-the whole coupon is the sheared area). The shear-locking angle
+the whole coupon is the sheared area). With ``clamp_yarns`` the clamps hold whole yarns
+(:func:`whole_yarn_edges`) and L_fabric is the free square's side: the clamped strips
+move with the frame and store nothing (their mutual bonds and contacts are removed), so
+the free square is the area that shears. The shear-locking angle
 (:func:`fabmd.results.curves.locking_angle`): a line fitted to F_norm over a fixed
-initial range (5–15°), the departure where F_norm stays above twice that line for 5°,
-and the tangent over those 5° meeting the initial line; it does not depend on where
-the test stops.
+initial range past the start-up (10–20°), the departure where F_norm stays above
+twice that line for 5°, and the tangent over those 5° meeting the initial line; it
+does not depend on where the test stops.
 
 ``pretension_strain`` is a clamping preload: the rest length of the bonds of the
 unclamped fibres shrinks by that strain (ramped, clamps held) before the free
@@ -101,6 +104,41 @@ class FrameGeometry:
     inner: tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi of the free fabric
     centre: tuple[float, float]
     free_side_m: float
+    clamp_yarns: int | None = None  # whole yarns each clamp holds (None: a strip width)
+
+    @property
+    def sheared_side_m(self) -> float:
+        """Side of the square F_norm is normalised by [m]: the fabric's side, or with
+        whole-yarn clamps the free square's (the area that shears)."""
+        return self.free_side_m if self.clamp_yarns else self.fabric_length_m
+
+
+def whole_yarn_edges(model: BeadModel, axis: int, n_yarns: int) -> tuple[float, float]:
+    """Clamp edges along ``axis`` (0: x, 1: y) [m] that hold ``n_yarns`` whole yarns on
+    each side: the yarns that run across ``axis`` (along the clamp's edge), sorted by
+    their position on it; each edge lies midway in the gap between the last held yarn's
+    outermost bead centre and the first free yarn's, so the free square spans a whole
+    number of yarn spacings (gap centre to gap centre) at every coupon size."""
+    p, yid = model.positions, model.yarn_ids
+    spans, centres = [], []
+    for y in np.unique(yid):
+        q = p[yid == y]
+        if np.ptp(q[:, 1 - axis]) > np.ptp(q[:, axis]):  # runs along the edge
+            spans.append((q[:, axis].min(), q[:, axis].max()))
+            centres.append(q[:, axis].mean())
+    spans = [spans[k] for k in np.argsort(centres)]
+    name = "xy"[axis]
+    if len(spans) < 2 * n_yarns + 2:
+        raise InputError(f"picture_frame.clamp_yarns = {n_yarns} holds {2 * n_yarns} of the "
+                         f"{len(spans)} yarns across {name} and leaves fewer than 2 free; use "
+                         f"at most {max(len(spans) // 2 - 1, 0)} or a larger coupon")
+    (_, low_held), (low_free, _) = spans[n_yarns - 1], spans[n_yarns]
+    (_, high_free), (high_held, _) = spans[-n_yarns - 1], spans[-n_yarns]
+    if low_free <= low_held or high_held <= high_free:
+        raise InputError(f"picture_frame.clamp_yarns: the yarns across {name} touch (no gap "
+                         f"between held and free yarns to put a clamp edge in); use "
+                         f"clamp_width_m")
+    return 0.5 * (low_held + low_free), 0.5 * (high_free + high_held)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -121,6 +159,11 @@ class PictureFrame(ClampedTest):
         frame_length_m: arm length pin to pin [m]; default 5 % longer than the fabric side.
         clamp_width_m: width of the clamped strip along each edge [m]; default a tenth
             of the fabric side.
+        clamp_yarns: each clamp holds this many whole yarns (those along its edge), its
+            edge midway in the gap to the first free yarn, so the free square is a whole
+            number of yarn spacings at every coupon size; F_norm is then per area of the
+            free square (the area that shears). Overrides ``clamp_width_m``; None
+            (default): the strip of ``clamp_width_m``.
         pretension_strain: clamping preload: rest-length shrink of the unclamped fibres,
             in [0, 0.05).
         pretension_transits: duration of the preload ramp in axial wave transits of the
@@ -145,10 +188,11 @@ class PictureFrame(ClampedTest):
     max_displacement_m: float | None = None
     frame_length_m: float | None = None
     clamp_width_m: float | None = None
+    clamp_yarns: int | None = None
     pretension_strain: float = 0.0
     pretension_transits: float = 20.0
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0, 40.0)
-    locking_initial_deg: tuple[float, float] = (5.0, 15.0)
+    locking_initial_deg: tuple[float, float] = (10.0, 20.0)
     locking_factor: float = 2.0
     speed_fraction: float = 1e-3
     loading_speed: AdaptiveLoading = field(default_factory=AdaptiveLoading)
@@ -157,6 +201,8 @@ class PictureFrame(ClampedTest):
         inputs.in_range("picture_frame.max_shear_angle_deg", self.max_shear_angle_deg, 0, 80,
                         low_open=True)
         self.check_positive_or_none("max_displacement_m", "frame_length_m", "clamp_width_m")
+        if self.clamp_yarns is not None:
+            inputs.positive_int("picture_frame.clamp_yarns", self.clamp_yarns)
         inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, 0, 0.05,
                         high_open=True)
         inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
@@ -197,15 +243,21 @@ class PictureFrame(ClampedTest):
         if clamp >= 0.35 * side:
             raise InputError(f"picture_frame.clamp_width_m = {clamp:g} m leaves too little free "
                              f"fabric on a {side:g} m coupon; use at most {0.35 * side:g} m")
-        edges = [e for k in range(2)
-                 for e in self.clamp_edges(p[:, k], p[:, k].min() + clamp, p[:, k].max() - clamp)]
+        held = None if self.clamp_yarns is None else int(self.clamp_yarns)  # 1.0 from --set
+        if held is not None:
+            ends = [whole_yarn_edges(model, k, held) for k in range(2)]
+            clamp = float(np.mean([ends[k][0] - p[:, k].min() + d / 2 for k in range(2)]))
+        else:
+            ends = [(p[:, k].min() + clamp, p[:, k].max() - clamp) for k in range(2)]
+        edges = [e for k in range(2) for e in self.clamp_edges(p[:, k], *ends[k])]
         centre = (lo + hi) / 2
         pin = centre - frame / 2
         return FrameGeometry(pin_a=(float(pin[0]), float(pin[1])), frame_length_m=float(frame),
                              fabric_length_m=side, clamp_width_m=float(clamp),
                              inner=tuple(edges), centre=(float(centre[0]), float(centre[1])),
                              free_side_m=float(np.mean([edges[1] - edges[0],
-                                                        edges[3] - edges[2]])))
+                                                        edges[3] - edges[2]])),
+                             clamp_yarns=held)
 
     def clamped(self, model: BeadModel) -> np.ndarray:
         """Mask of the clamped beads (outside the free square)."""
@@ -375,7 +427,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     gamma = shear_angle_from_displacement_deg(d, g.frame_length_m)
     force = frame_force_n(d, out, window_width_m(plan))
     fs = shear_force_n(force, d, g.frame_length_m)
-    fnorm = normalised_shear_force_n_m(fs, g.frame_length_m, g.fabric_length_m)
+    fnorm = normalised_shear_force_n_m(fs, g.frame_length_m, g.sheared_side_m)
     curve = {"time_s": out["time_s"], "displacement_m": d, "shear_angle_deg": gamma,
              "frame_angle_deg": np.degrees(frame_angle_rad(d, g.frame_length_m)),
              "frame_force_n": force, "shear_force_n": fs, "normalised_force_n_m": fnorm,
@@ -400,6 +452,8 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
         "frame_length_m": g.frame_length_m,
         "clamp_width_m": g.clamp_width_m,
         "free_side_m": g.free_side_m,
+        "clamp_yarns": g.clamp_yarns,
+        "normalised_by_side_m": g.sheared_side_m,
         "pretension_strain": test.pretension_strain,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
@@ -426,7 +480,8 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
             if len(steps) else None},
         **test.quasi_static_evidence(out, model, d / dmax),
     }
-    series = [{"x": gamma, "y": fnorm, "label": "F_norm = F_s L_frame / L_fabric²"}]
+    per = "L_free²" if g.clamp_yarns else "L_fabric²"  # whole-yarn clamps: the free square
+    series = [{"x": gamma, "y": fnorm, "label": f"F_norm = F_s L_frame / {per}"}]
     if lock["found"]:
         series.append({"x": [lock["x"], lock["x"]], "y": [0.0, float(fnorm.max())],
                        "style": "--", "label": f"locking {lock['x']:.1f}°", "lw": 1.0})

@@ -105,13 +105,14 @@ LOCKING_METHOD = ("initial branch: straight line fitted over {initial[0]:g}-{ini
                   "tangent fitted over those {window:g} deg meets the initial line")
 
 
-def locking_angle(angle_deg, force, initial_deg: tuple[float, float] = (5.0, 15.0),
+def locking_angle(angle_deg, force, initial_deg: tuple[float, float] = (10.0, 20.0),
                   factor: float = 2.0, window_deg: float = 5.0, min_ratio: float = 3.0,
                   min_points: int = 3) -> dict:
     """Shear-locking angle by a stated method that does not depend on where the test stops.
 
     1. The initial branch: a straight line F_lin fitted to the points with angle in
-       ``initial_deg`` (a fixed range, past the start-up).
+       ``initial_deg`` (a fixed range past the start-up: default 10–20°; at 5° the
+       fabric is still being brought up to the frame's speed and F may read low or high).
     2. The departure γ_d: the first angle past that range from which the force stays at
        or above ``factor`` × F_lin (and above F_lin + 3 × the fit's scatter) for
        ``window_deg`` degrees.
