@@ -16,8 +16,8 @@ all in this process, one run after another. Prints per run: loading steps, wall 
 test stage only), their ratios to the reference run's, the largest relative difference of
 the report values against the reference run's, the largest difference over the whole
 curve (above a fifth of its range, relative to the reference curve's largest value) and
-the quasi-static verdict; per fixed speed the largest report difference to the run at
-half of it.
+fabmd's per-interval quasi-static verdict (where it says no, the ranges it trusts); per
+fixed speed the largest report difference to the run at half of it.
 
     python benchmarks/adaptive.py [--tests tension picture-frame bias-extension] [--fast]
                                   [--speeds 4 2 1] [--variants max_speed_factor=32,...]
@@ -119,6 +119,9 @@ def run_one(test_obj, coupon, out: Path, engine: Engine, test: str, reuse: bool,
     if reuse and saved.is_file():
         run = json.loads(saved.read_text())
         run["curve"] = {k: np.asarray(v) for k, v in run["curve"].items()}
+        if "trusted" not in run and (out / "summary.json").is_file():  # older bench.json
+            run["trusted"] = json.loads((out / "summary.json").read_text())[
+                "quasi_static"].get("trusted")
         return run
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -134,7 +137,8 @@ def run_one(test_obj, coupon, out: Path, engine: Engine, test: str, reuse: bool,
            "curve": {c: np.asarray(result.curve[c]).tolist() for c in keep},
            "values": report_values(result.curve, test, xs),
            "mean_factor": adaptive["mean_speed_factor_after_start"] if adaptive else 1.0,
-           "ok": s["quasi_static"]["ok"], "beads": s["n_beads"],
+           "ok": s["quasi_static"]["ok"], "trusted": s["quasi_static"].get("trusted"),
+           "beads": s["n_beads"],
            "load": os.getloadavg()[0]}
     saved.write_text(json.dumps(run))
     run["curve"] = {k: np.asarray(v) for k, v in run["curve"].items()}
@@ -150,6 +154,15 @@ def report_diff(run: dict, ref: dict) -> float | None:
 
 def pct(value: float | None) -> str:
     return "-" if value is None else f"{100 * value:.2f} %"
+
+
+def verdict_text(run: dict) -> str:
+    """fabmd's per-interval verdict: yes, or no with the trusted ranges of the x axis."""
+    if run["ok"]:
+        return "yes"
+    trusted = run.get("trusted") or []
+    return "no" + (" (trusted " + ", ".join(f"{a:.3g}–{b:.3g}" for a, b in trusted) + ")"
+                   if trusted else "")
 
 
 def values_text(run: dict) -> str:
@@ -181,7 +194,7 @@ def reference(test: str, base, coupon, speeds: list[float], converged: float, ro
         mark = " (reference)" if i == chosen else ""
         rows.append([test, f"fixed {sf:g}{mark}", run["beads"], run["steps"], "-",
                      run["wall_s"], "-", 1.0, values_text(run), pct(half), "-", "-",
-                     "yes" if run["ok"] else "no"])
+                     verdict_text(run)])
     return runs[chosen][0], runs[chosen][1], rows
 
 
@@ -208,8 +221,7 @@ def compare(test: str, scene, coupon, speeds, converged, variants, root: Path,
                          if key != "max_speed_factor"),
                      run["beads"], run["steps"], ref["steps"] / run["steps"], run["wall_s"],
                      ref["wall_s"] / run["wall_s"], run["mean_factor"], values_text(run),
-                     "-", pct(report_diff(run, ref)), pct(whole),
-                     "yes" if run["ok"] else "no"])
+                     "-", pct(report_diff(run, ref)), pct(whole), verdict_text(run)])
         print(rows[-1], flush=True)
     return rows
 
