@@ -136,13 +136,8 @@ class ContactPower:
             return float("nan")
         if not len(f):
             return 0.0
-        # this rank's atoms and ghost images, as the pair style saw them: a ghost's
-        # velocity carries the box's deformation rate (fix deform remap v)
-        nlocal = int(lmp.extract_global("nlocal"))
-        nall = nlocal + int(lmp.extract_global("nghost"))
-        tag = np.asarray(lmp.numpy.extract_atom("id", nelem=nall), np.int64).reshape(-1)
-        x = np.asarray(lmp.numpy.extract_atom("x", nelem=nall), float).reshape(-1, 3)
-        v = np.asarray(lmp.numpy.extract_atom("v", nelem=nall), float).reshape(-1, 3)
+        # a ghost's velocity carries the box's deformation rate (fix deform remap v)
+        nlocal, (tag, x, v) = _with_ghosts(lmp, "id", "x", "v")
         dx = f[:, 6:9]
         owned, found = _candidates(tag[:nlocal], tags[:, 0])  # atom i is owned: one local
         i = owned[:, 0]
@@ -248,12 +243,7 @@ class ContactEnergy:
             return float("nan")
         if not len(pairs):
             return 0.0
-        nlocal = int(lmp.extract_global("nlocal"))
-        nall = nlocal + int(lmp.extract_global("nghost"))
-        tag = np.asarray(lmp.numpy.extract_atom("id", nelem=nall), np.int64).reshape(-1)
-        x = np.asarray(lmp.numpy.extract_atom("x", nelem=nall), float).reshape(-1, 3)
-        radius = np.asarray(lmp.numpy.extract_atom("radius", nelem=nall), float).reshape(-1)
-        kind = np.asarray(lmp.numpy.extract_atom("type", nelem=nall), np.int64).reshape(-1)
+        nlocal, (tag, x, radius, kind) = _with_ghosts(lmp, "id", "x", "radius", "type")
         owned, found = _candidates(tag[:nlocal], tags[:, 0])
         i = owned[:, 0]
         cand, valid = _candidates(tag, tags[:, 1])
@@ -269,6 +259,20 @@ class ContactEnergy:
         spring = self.pair_energy_j(radius[i] + radius[j] - dist, radius[i], radius[j],
                                     kind[i], kind[j])
         return float(np.sum(spring) + np.sum(pairs[:, 1]))
+
+
+def _with_ghosts(lmp, *names: str) -> tuple[int, list[np.ndarray]]:
+    """This rank's atoms and their ghost images, as the pair style saw them: the number
+    owned and, per per-atom property in ``names`` ("id", "type", "x", "v", "radius"), its
+    array over all of them (ids and types as int64, vectors as (n, 3))."""
+    nlocal = int(lmp.extract_global("nlocal"))
+    nall = nlocal + int(lmp.extract_global("nghost"))
+    arrays = []
+    for name in names:
+        dtype = np.int64 if name in ("id", "type") else float
+        a = np.asarray(lmp.numpy.extract_atom(name, nelem=nall), dtype)
+        arrays.append(a.reshape(-1, 3) if name in ("x", "v") else a.reshape(-1))
+    return nlocal, arrays
 
 
 def _candidates(tag: np.ndarray, wanted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
