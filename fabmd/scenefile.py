@@ -9,7 +9,8 @@ Sections fabmd owns (unknown keys in them are refused, naming the key)::
                        fibre_volume_fraction, filament_diameter_m, filament_count
     [yarns.binder]   (3D architectures only)
     [materials.NAME] FibreMaterial fields: modulus_pa, density_kg_m3
-    [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor
+    [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor,
+                       bead_register ("aligned" | "staggered")
     [contact]        ContactModel fields: friction, normal, normal_stiffness_pa, ...
 
 Every other top-level table (``[crimp]``, ``[tension]``, ``[picture_frame]``,

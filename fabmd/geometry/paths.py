@@ -190,7 +190,7 @@ def _chord_arc(along: np.ndarray, height: np.ndarray, spacing_m: float,
 
 
 def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
-                periodic: bool) -> list[FibreBeads]:
+                periodic: bool, phases: np.ndarray | None = None) -> list[FibreBeads]:
     """Beads along every fibre of a yarn.
 
     Args:
@@ -200,6 +200,8 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
         periodic: the fibre closes on itself over ``path.length_m`` (which must be a
             whole number of periods); its bead count is rounded so that the chord
             spacing is as close to ``spacing_m`` as possible, and returned.
+        phases: (n,) where each fibre's first bead sits, in bead spacings from the
+            path's start, in [0, 1) (default 0: the fibres of the yarn in register).
 
     Non-periodic fibres start at u = 0 and get beads exactly ``spacing_m`` apart
     (chord) up to the end of the path. Beads are placed by arc length corrected
@@ -214,19 +216,14 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
     z, slope = path.profile(u)
     norm = np.sqrt(1.0 + slope * slope)
     nx, nz = -slope / norm, 1.0 / norm  # in-plane normal (along, z)
+    phases = np.zeros(len(offsets)) if phases is None else np.asarray(phases, float)
     out = []
-    for across, through in offsets:
+    for (across, through), phase in zip(offsets, phases, strict=True):
         sigma = _chord_arc(u + through * nx, z + through * nz, spacing_m, periodic)
         total = sigma[-1]
-        if periodic:
-            n_beads = max(3, int(round(total / spacing_m)))
-            chord = total / n_beads
-            targets = np.arange(n_beads) * chord
-        else:
-            chord = spacing_m
-            targets = np.arange(int(math.floor(total / spacing_m + 1e-9)) + 1) * chord
-            if len(targets) < 2:
-                raise InputError(f"yarn {path.name} is shorter than one bead spacing")
+        chord, targets = _first_targets(total, spacing_m, periodic, phase)
+        if len(targets) < 2:
+            raise InputError(f"yarn {path.name} is shorter than one bead spacing")
 
         def place(tg: np.ndarray, sigma=sigma, across=across, through=through) -> np.ndarray:
             ub = np.interp(tg, sigma, u)
@@ -246,15 +243,17 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
                                  f"increase the spacing of the yarns it crosses")
             if periodic:
                 chord = float(chords.mean())
-            step_sigma = np.diff(np.append(targets, total if periodic else targets[-1:]))
+            start = targets[0]  # the fibre's phase stays; the chords even out after it
+            step_sigma = np.diff(np.append(targets, total + start if periodic
+                                           else targets[-1:]))
             if not periodic:
                 step_sigma = step_sigma[:-1]
             step_sigma *= chord / chords
             if periodic:
                 step_sigma *= total / step_sigma.sum()
-                targets = np.concatenate([[0.0], np.cumsum(step_sigma[:-1])])
+                targets = start + np.concatenate([[0.0], np.cumsum(step_sigma[:-1])])
             else:
-                targets = np.concatenate([[0.0], np.cumsum(step_sigma)])
+                targets = start + np.concatenate([[0.0], np.cumsum(step_sigma)])
                 targets = targets[targets <= total * (1 + 1e-12)]
             pos = place(targets)
         if periodic:
@@ -263,6 +262,19 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
                                          axis=1).mean())
         out.append(FibreBeads(pos, chord))
     return out
+
+
+def _first_targets(total: float, spacing_m: float, periodic: bool, phase: float
+                   ) -> tuple[float, np.ndarray]:
+    """Chord and arc positions of a fibre's beads before the chords are evened out: from
+    ``phase`` chords along; a periodic fibre gets a whole number of chords."""
+    if periodic:
+        n_beads = max(3, int(round(total / spacing_m)))
+        chord = total / n_beads
+        return chord, (np.arange(n_beads) + phase) * chord
+    first = phase * spacing_m
+    return spacing_m, first + np.arange(
+        int(math.floor((total - first) / spacing_m + 1e-9)) + 1) * spacing_m
 
 
 #: fixed-point passes that equalise chord lengths after placement by arc length

@@ -29,6 +29,10 @@ from ..geometry.material import VirtualFibre
 
 #: contacts per bead assumed in the stability bound (hexagonal packing)
 STABILITY_CONTACTS = 6
+#: ``Discretisation.bead_register`` choices
+BEAD_REGISTERS = ("aligned", "staggered")
+#: (√5 − 1)/2: the phases frac(k·g) of any n fibres are spread almost evenly over [0, 1)
+GOLDEN_FRACTION = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 @dataclass(frozen=True)
@@ -42,17 +46,34 @@ class Discretisation:
             > 1 to take a larger time step; check rate independence when you do.
         bending_factor: fraction of the solid-rod bending stiffness E·I given to
             each virtual fibre, in [0, 1]; 0 (default) adds no bending term.
+        bead_register: where each fibre's beads sit along it. ``"aligned"`` (default):
+            every fibre's first bead at the yarn's start, so the fibres of a yarn are in
+            register. ``"staggered"``: fibre k of a yarn starts φ_k·l0 further on,
+            φ_k = frac(k·(√5 − 1)/2), so neighbouring fibres and the fibre crossings of
+            a yarn crossing sample many registers (the register average that the
+            within-family law and the per-crossing contact assume; README "Bead
+            register").
     """
 
     spacing_ratio: float = 0.5
     mass_scaling: float = 1.0
     bending_factor: float = 0.0
+    bead_register: str = "aligned"
 
     def __post_init__(self):
         inputs.in_range("discretisation.spacing_ratio", self.spacing_ratio, 0.0, 1.0,
                         low_open=True)
         inputs.positive("discretisation.mass_scaling", self.mass_scaling)
         inputs.in_range("discretisation.bending_factor", self.bending_factor, 0.0, 1.0)
+        if self.bead_register not in BEAD_REGISTERS:
+            raise InputError(f"discretisation.bead_register must be one of "
+                             f"{', '.join(map(repr, BEAD_REGISTERS))}, got {self.bead_register!r}")
+
+    def bead_phases(self, n_fibres: int) -> np.ndarray:
+        """Start of each fibre's first bead along it, in bond lengths, in [0, 1)."""
+        if self.bead_register == "aligned":
+            return np.zeros(n_fibres)
+        return np.mod(np.arange(n_fibres) * GOLDEN_FRACTION, 1.0)
 
 
 @dataclass(frozen=True)

@@ -252,7 +252,7 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
     cell_keys = fabric.cell_spec_keys()
     _check_folding(paths, fams, cell_keys)
     periodic = fabric.periodic
-    per_yarn = _fibre_shapes(paths, fams, cell_keys, periodic)
+    per_yarn = _fibre_shapes(paths, fams, cell_keys, periodic, disc)
     type_table, type_params = _bond_types(fams, families, paths, per_yarn, cell_keys, disc)
     beads = _place_beads(paths, per_yarn, families, cell_keys, type_table, type_params)
     pos, diam, fibre_ids, fibre_type = beads["positions"], beads["diameters"], \
@@ -277,19 +277,21 @@ def render_loose(fabric: Fabric, discretisation: Discretisation | None = None, *
 
 
 def _fibre_shapes(paths: list[YarnPath], fams: dict[str, FamilyBeads], cell_keys: list[str],
-                  periodic: bool) -> list[list]:
+                  periodic: bool, disc: Discretisation) -> list[list]:
     """The fibres of every yarn (in ``paths`` order): those of each distinct unit-cell
-    yarn are computed once (at offset 0) and shared by its copies."""
+    yarn are computed once (at offset 0) and shared by its copies; each fibre's first
+    bead sits at its phase (``disc.bead_register``)."""
     shapes: dict[int, list] = {}
     per_yarn = []
     for path in paths:
         fam = fams[cell_keys[path.cell_index]]
         if path.cell_index not in shapes:
+            phases = disc.bead_phases(len(fam.offsets_m))
             base = YarnPath(path.name, path.family, path.axis, 0.0, path.length_m,
                             path.period_m, path.node_u_m, path.node_z_m, path.plateau_m,
                             path.z_m, path.level, path.cell_index)
             shapes[path.cell_index] = fibre_beads(base, fam.offsets_m, fam.beads.bond_length_m,
-                                                  periodic)
+                                                  periodic, phases)
         per_yarn.append(shapes[path.cell_index])
     return per_yarn
 

@@ -355,15 +355,11 @@ class Compaction:
     def reduce(self, run_dir: Path, model: BeadModel) -> DrivenResult:
         means = read_ave_time(run_dir / "means.dat")
         plan = read_plan(run_dir) or self.plan(model)  # what the run was written with
-        dt, settle = plan.time_step_s, plan.extra["settle_steps"]
-        keep = means["step"] > settle  # the settling intervals are not part of the curve
-        p, h = means["pressure_pa"][keep], means["thickness_m"][keep]
-        pb, ke = means["bottom_pressure_pa"][keep], means["kinetic_j"][keep]
-        phase = means["phase"][keep]
-        loading = phase > 0  # an interval straddling the turn is counted with the loading
-        curve = {"time_s": (means["step"][keep] - settle) * dt, "pressure_pa": p,
-                 "thickness_m": h, "phase": np.where(loading, 1, -1),
-                 "bottom_pressure_pa": pb, "kinetic_energy_j": ke}
+        dt = plan.time_step_s
+        curve = _curve(means, plan.extra["settle_steps"], dt)
+        p, h = curve["pressure_pa"], curve["thickness_m"]
+        pb, ke = curve["bottom_pressure_pa"], curve["kinetic_energy_j"]
+        loading = curve["phase"] > 0
         area = self.area_m2(model)
         model_lo, model_hi = self.platens(model)
         lo, hi = settled_platens(run_dir, (model_lo, model_hi))
@@ -413,17 +409,9 @@ class Compaction:
             "datasheet_pressure_pa": self.datasheet_pressure_pa,
             "final_thickness_m": float(h[-1]),
             "thickness_monotone": bool(rises.size == 0 or rises.max() <= 1e-9 * hi),
-            "monotone_note": "loading branch from where both platens carry the load (within "
-                             "a factor 2) to the turn: sorted by pressure, the thickness "
-                             "never rises",
+            "monotone_note": MONOTONE_NOTE,
             **measures,
-            "quasi_static_note": "kinetic energy over the platen work done since the loading "
-                                 "began, and |bottom − top| / top pressure, on the loading "
-                                 "branch from first contact (both platens carry the load) "
-                                 "above 10 % of the peak; None: not measured (no such sample"
-                                 ", or the platen had done no work yet); "
-                                 "quasi_static_at_pressure: the same mismatch at each "
-                                 "reported pressure",
+            "quasi_static_note": QUASI_STATIC_NOTE,
             **overlap_summary(run_dir, self.contact),
         }
         summary["quasi_static_at_pressure"] = mismatch_at(
@@ -438,6 +426,25 @@ class Compaction:
         return DrivenResult(run_dir, curve, summary, [curve_plot(p, h, loading, summary,
                                                                  bool(problems))])
 
+
+def _curve(means: dict, settle_steps: int, time_step_s: float) -> dict:
+    """The run's curve columns after the free settle (those intervals are not part of it);
+    phase +1 loading (an interval straddling the turn is counted with it), −1 unloading."""
+    keep = means["step"] > settle_steps
+    return {"time_s": (means["step"][keep] - settle_steps) * time_step_s,
+            "pressure_pa": means["pressure_pa"][keep], "thickness_m": means["thickness_m"][keep],
+            "phase": np.where(means["phase"][keep] > 0, 1, -1),
+            "bottom_pressure_pa": means["bottom_pressure_pa"][keep],
+            "kinetic_energy_j": means["kinetic_j"][keep]}
+
+
+MONOTONE_NOTE = ("loading branch from where both platens carry the load (within a factor 2) "
+                 "to the turn: sorted by pressure, the thickness never rises")
+QUASI_STATIC_NOTE = ("kinetic energy over the platen work done since the loading began, and "
+                     "|bottom − top| / top pressure, on the loading branch from first contact "
+                     "(both platens carry the load) above 10 % of the peak; None: not measured "
+                     "(no such sample, or the platen had done no work yet); "
+                     "quasi_static_at_pressure: the same mismatch at each reported pressure")
 
 #: a rerun goes this much below the speed the failed run's mismatch asks for (the mismatch
 #: is only about proportional to the speed)
