@@ -223,3 +223,32 @@ def test_convergence_json_name_fits_the_file_system():
     assert len(a.name) <= 255 and len(b.name) <= 255 and a.name.endswith(".json")
     assert a != b and a == bench.data_path_for(long_a)
     assert not a.exists() or a.is_file()  # stat works on the name
+
+
+def test_interval_compare_reads_each_interval_against_the_last_run(tmp_path, capsys):
+    """Two synthetic curves: the faster one 10 % above the reference from 10° on and with
+    an inertia-share column; the table gives each interval's mean and difference."""
+    import numpy as np
+
+    ic = load_benchmark("interval_compare")
+    angle = np.linspace(0.0, 20.0, 81)
+    slow = 1e3 * (0.01 + 0.001 * angle)
+    fast = np.where(angle >= 10.0, 1.1 * slow, slow)
+    paths = []
+    for name, force, extra in (("fast", fast, True), ("slow", slow, False)):
+        header = "shear_angle_deg,normalised_force_n_m" + (",interval_inertia_share"
+                                                           if extra else "")
+        lines = [f"{a},{f}" + (",0.2" if extra else "") for a, f in zip(angle, force,
+                                                                        strict=True)]
+        path = tmp_path / f"{name}.csv"
+        path.write_text("\n".join([header, *lines]) + "\n")
+        paths.append(path)
+    table = ic.interval_table([(p.stem, ic.read_curve(p)) for p in paths], 5.0, 20.0)
+    assert [(r["from"], r["to"]) for r in table] == [(0, 5), (5, 10), (10, 15), (15, 20)]
+    mean_slow = np.mean(slow[(angle >= 10) & (angle < 15)]) / 1e3
+    assert table[2]["runs"][1]["force_n_mm"] == pytest.approx(mean_slow)
+    assert table[2]["runs"][0]["difference"] == pytest.approx(0.1)
+    assert table[0]["runs"][0]["difference"] == pytest.approx(0.0)
+    assert table[2]["runs"][0]["i"] == pytest.approx(0.2) and table[2]["runs"][1]["i"] is None
+    ic.main([f"fast={paths[0]}", f"slow={paths[1]}"])
+    assert "| 10–15° | " in capsys.readouterr().out
