@@ -252,3 +252,13 @@ def test_interval_compare_reads_each_interval_against_the_last_run(tmp_path, cap
     assert table[2]["runs"][0]["i"] == pytest.approx(0.2) and table[2]["runs"][1]["i"] is None
     ic.main([f"fast={paths[0]}", f"slow={paths[1]}"])
     assert "| 10–15° | " in capsys.readouterr().out
+
+
+def test_a_crossing_turned_in_place_has_the_same_friction_lever_at_every_spacing():
+    """Register-averaged friction torque / normal force of one crossing: the same lever at
+    s/d 0.5 and 0.25 (0.068 d at δ = 0.02 d), larger at a deeper overlap (wider patch)."""
+    cl = load_benchmark("crossing_lever")
+    coarse, fine = cl.crossing_lever(0.5, 0.02, 16), cl.crossing_lever(0.25, 0.02, 16)
+    assert fine == pytest.approx(coarse, rel=0.01)
+    assert 0.05 < fine < 0.09
+    assert cl.crossing_lever(0.25, 0.05, 16) > 1.4 * fine
