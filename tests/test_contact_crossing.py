@@ -190,3 +190,36 @@ def test_lammps_crossings_carry_the_same_force_at_either_spacing(tmp_path):
         mean["per_length", 90.0, 0.5], rel=1e-9)  # the two forms agree at s/d 0.5
     assert mean["per_length", 90.0, 0.25] / mean["per_length", 90.0, 0.5] == pytest.approx(
         2.0, rel=0.02)
+
+
+def test_crossing_friction_sets_mu_of_the_crossings_only():
+    """``crossing_friction``: μ of pairs of different families; ``friction`` stays within a
+    family; refused without per-type-pair coefficients or below 0."""
+    b = bead_parameters(FIBRE, Discretisation(0.5))
+    contact = ContactModel(friction=0.3, crossing_friction=0.0, within_family_law=LAW)
+    mus = {(i, j): c["friction"] for i, j, c in contact.type_pair_coefficients([b], 2)}
+    assert mus == {(1, 1): 0.3, (1, 2): 0.0, (2, 2): 0.3}
+    default = ContactModel(friction=0.3, within_family_law=LAW)
+    assert {c["friction"] for _, _, c in default.type_pair_coefficients([b], 2)} == {0.3}
+    with pytest.raises(InputError, match="contact.crossing_friction needs per-type-pair"):
+        ContactModel(crossing_friction=0.1)
+    with pytest.raises(InputError, match="contact.crossing_friction"):
+        ContactModel(crossing_friction=-0.1, within_family_law=LAW)
+
+
+def test_the_scene_file_takes_the_crossing_friction_into_the_pair_coefficients():
+    from fabmd.examples_dir import example_scene
+    from fabmd.model.beads import model_bead_parameters
+    from fabmd.scene.blocks import contact
+    from fabmd.scenefile import parse_scene
+
+    data = tomllib.loads(example_scene("twintex_plain.toml").read_text())
+    data["contact"]["crossing_friction"] = 0.1
+    scene = parse_scene(data)
+    assert scene.contact.crossing_friction == 0.1
+    model = scene.model(check=False)
+    text = contact(model, scene.contact, model_bead_parameters(model))
+    lines = [ln.split() for ln in text.splitlines() if ln.startswith("pair_coeff")
+             and "granular" in ln]
+    mu = {(ln[1], ln[2]): float(ln[ln.index("linear_history") + 3]) for ln in lines}
+    assert mu == {("1", "1"): 0.3, ("1", "2"): 0.1, ("2", "2"): 0.3}

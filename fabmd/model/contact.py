@@ -235,6 +235,9 @@ class ContactModel:
             2π·k'·δ²·(1 − δ/d)/sin θ whatever the bead spacing, averaged over register;
             module docstring "Crossing per crossing"). ``"per_crossing"`` needs a split
             contact (``within_family_stiffness_pa`` or ``within_family_law``).
+        crossing_friction: Coulomb μ of pairs of different families (the warp–weft
+            crossings), default ``friction``; ``friction`` then acts within a family
+            (fibres of a yarn and neighbouring yarns). Needs a split contact.
     """
 
     friction: float = 0.3
@@ -251,9 +254,16 @@ class ContactModel:
     within_family_law: BundleContact | None = None
     within_family_laws: tuple = ()
     crossing: str = "per_length"
+    crossing_friction: float | None = None
 
     def __post_init__(self):
         inputs.non_negative("contact.friction", self.friction)
+        if self.crossing_friction is not None:
+            inputs.non_negative("contact.crossing_friction", self.crossing_friction)
+            if not self.split:
+                raise InputError(
+                    "contact.crossing_friction needs per-type-pair coefficients (give "
+                    "within_family_stiffness_pa or within_family), got neither")
         inputs.one_of("contact.crossing", self.crossing, CROSSING_FORMS)
         if self.crossing == "per_crossing" and not self.split:
             raise InputError(
@@ -391,6 +401,8 @@ class ContactModel:
                    self.crossing_stiffness_pa(beads)), beads)
                for i, law in enumerate(map(self.family_law, families), start=1)
                if len(sections) > 1 and law in sections}
+        if self.crossing_friction is not None:
+            cross = {**cross, "friction": self.crossing_friction}
         return [(i, j, own.get(i, within) if i == j else cross)
                 for i in range(1, n_types + 1) for j in range(i, n_types + 1)]
 
