@@ -203,8 +203,8 @@ def fibre_beads(path: YarnPath, offsets: np.ndarray, spacing_m: float,
         phases: (n,) where each fibre's first bead sits, in bead spacings from the
             path's start, in [0, 1) (default 0: the fibres of the yarn in register).
 
-    Non-periodic fibres start at u = 0 and get beads exactly ``spacing_m`` apart
-    (chord) up to the end of the path. Beads are placed by arc length corrected
+    Non-periodic fibres start at their phase (u = 0 by default) and get beads exactly
+    ``spacing_m`` apart (chord) up to the end of the path. Beads are placed by arc length corrected
     for curvature (chord = arc·(1 − κ²l²/24)), so chords match to O(l⁴).
     """
     offsets = np.asarray(offsets, float).reshape(-1, 2)

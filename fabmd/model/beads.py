@@ -65,9 +65,7 @@ class Discretisation:
                         low_open=True)
         inputs.positive("discretisation.mass_scaling", self.mass_scaling)
         inputs.in_range("discretisation.bending_factor", self.bending_factor, 0.0, 1.0)
-        if self.bead_register not in BEAD_REGISTERS:
-            raise InputError(f"discretisation.bead_register must be one of "
-                             f"{', '.join(map(repr, BEAD_REGISTERS))}, got {self.bead_register!r}")
+        inputs.one_of("discretisation.bead_register", self.bead_register, BEAD_REGISTERS)
 
     def bead_phases(self, n_fibres: int) -> np.ndarray:
         """Start of each fibre's first bead along it, in bond lengths, in [0, 1)."""
