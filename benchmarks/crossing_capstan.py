@@ -63,6 +63,35 @@ def path(theta: float, straight: float, spacing: float) -> tuple[np.ndarray, flo
     return np.array(pts), total / n
 
 
+def _loading(pts: np.ndarray, ramp: float, speed: float) -> list[str]:
+    """The load T_in on A's first bead (ramped over ``ramp`` s), the pull of its last bead
+    (smooth start over ``ramp``, then ``speed``), and T_out as ``v_tout``."""
+    t_load = (pts[0] - pts[1]) / np.linalg.norm(pts[0] - pts[1])
+    t_pull = (pts[-1] - pts[-2]) / np.linalg.norm(pts[-1] - pts[-2])
+    return ["group load_end id 1", f"group pulled id {len(pts)}",
+             "group free subtract A pulled",
+             "variable t equal time",
+             f"variable ramp equal \"(v_t<{ramp})*(1-cos(PI*v_t/{ramp}))/2+(v_t>={ramp})\"",
+             f"variable lx equal {LOAD * t_load[0]}*v_ramp",
+             f"variable ly equal {LOAD * t_load[1]}*v_ramp",
+             f"variable tp equal \"(v_t>{ramp})*(v_t-{ramp})\"",
+             # smooth start over one ramp, then constant speed
+             f"variable u equal \"{speed}*((v_tp<{ramp})*(v_tp/2-{ramp}/(2*PI)*sin(PI*v_tp/{ramp}))"
+             f"+(v_tp>={ramp})*(v_tp-{ramp}/2))\"",
+             f"variable v equal \"{speed}*((v_tp<{ramp})*(1-cos(PI*v_tp/{ramp}))/2"
+             f"+(v_tp>={ramp}))\"",
+             f"variable ux equal {t_pull[0]}*v_u", f"variable uy equal {t_pull[1]}*v_u",
+             f"variable vx equal {t_pull[0]}*v_v", f"variable vy equal {t_pull[1]}*v_v",
+             "variable zero equal 0.0",
+             "fix integrate free nve",
+             "fix pull pulled move variable v_ux v_uy v_zero v_vx v_vy v_zero",
+             "fix load load_end addforce v_lx v_ly 0.0",
+             "fix planar A setforce NULL NULL 0.0",
+             "compute fp pulled reduce sum fx fy",
+             f"variable tout equal \"-(c_fp[1]*{t_pull[0]}+c_fp[2]*{t_pull[1]})\"",
+             "thermo_style custom step v_tout", "thermo 100000"]
+
+
 def ratio(spacing_ratio: float, theta: float, register: float, pull_d: float = 3.0,
           speed_fraction: float = 0.03) -> tuple[float, float, float]:
     """T_out/T_in over the second half of the pull: mean, and the lowest and highest of
@@ -103,30 +132,7 @@ def ratio(spacing_ratio: float, theta: float, register: float, pull_d: float = 3
              "pair_coeff * *", "special_bonds lj 0 1 1",
              f"neighbor {0.2 * D} bin", "neigh_modify exclude molecule/intra all",
              "neigh_modify exclude type 2 2", f"timestep {dt}"]
-    t_load = (pts[0] - pts[1]) / np.linalg.norm(pts[0] - pts[1])
-    t_pull = (pts[-1] - pts[-2]) / np.linalg.norm(pts[-1] - pts[-2])
-    cmds += ["group load_end id 1", f"group pulled id {n_a}",
-             "group free subtract A pulled",
-             "variable t equal time",
-             f"variable ramp equal \"(v_t<{ramp})*(1-cos(PI*v_t/{ramp}))/2+(v_t>={ramp})\"",
-             f"variable lx equal {LOAD * t_load[0]}*v_ramp",
-             f"variable ly equal {LOAD * t_load[1]}*v_ramp",
-             f"variable tp equal \"(v_t>{ramp})*(v_t-{ramp})\"",
-             # smooth start over one ramp, then constant speed
-             f"variable u equal \"{speed}*((v_tp<{ramp})*(v_tp/2-{ramp}/(2*PI)*sin(PI*v_tp/{ramp}))"
-             f"+(v_tp>={ramp})*(v_tp-{ramp}/2))\"",
-             f"variable v equal \"{speed}*((v_tp<{ramp})*(1-cos(PI*v_tp/{ramp}))/2"
-             f"+(v_tp>={ramp}))\"",
-             f"variable ux equal {t_pull[0]}*v_u", f"variable uy equal {t_pull[1]}*v_u",
-             f"variable vx equal {t_pull[0]}*v_v", f"variable vy equal {t_pull[1]}*v_v",
-             "variable zero equal 0.0",
-             "fix integrate free nve",
-             "fix pull pulled move variable v_ux v_uy v_zero v_vx v_vy v_zero",
-             "fix load load_end addforce v_lx v_ly 0.0",
-             "fix planar A setforce NULL NULL 0.0",
-             "compute fp pulled reduce sum fx fy",
-             f"variable tout equal \"-(c_fp[1]*{t_pull[0]}+c_fp[2]*{t_pull[1]})\"",
-             "thermo_style custom step v_tout", "thermo 100000"]
+    cmds += _loading(pts, ramp, speed)
     lmp.commands_list(cmds)
     chunk = 100  # the mean of each chunk of steps, averaged over the chunks
     half = chunk * round((ramp * 2 + pull_time / 2) / dt / chunk)
