@@ -93,14 +93,16 @@ def _loading(pts: np.ndarray, ramp: float, speed: float) -> list[str]:
 
 
 def ratio(spacing_ratio: float, theta: float, register: float, pull_d: float = 3.0,
-          speed_fraction: float = 0.03) -> tuple[float, float, float]:
+          speed_fraction: float = 0.03, stiffness_factor: float = 1.0
+          ) -> tuple[float, float, float]:
     """T_out/T_in over the second half of the pull: mean, and the lowest and highest of
-    its means over 100-step chunks (the ripple as A's beads pass over B)."""
+    its means over 100-step chunks (the ripple as A's beads pass over B).
+    ``stiffness_factor`` scales the contact's k' (a softer crossing)."""
     l0 = spacing_ratio * D
     pts, l0 = path(theta, 12 * D, l0)
     mass = RHO * AREA * l0
     kb = EA / l0  # bond spring [N/m]; LAMMPS harmonic K = kb/2
-    kn = 0.4 * EA / D**2 * l0
+    kn = stiffness_factor * 0.4 * EA / D**2 * l0
     m_eff = 0.5 * mass
     gn = 0.3 * 2 * math.sqrt(kn / m_eff)
     dt = 0.1 * 2 / math.sqrt((4 * kb + 6 * kn) / mass)
