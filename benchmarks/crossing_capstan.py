@@ -12,8 +12,9 @@ friction: where the coarse excess comes from"): does a fibre slide through a cro
 harder at s/d 0.5 than at 0.25 and 0.125, i.e. does the bead spacing set the friction a
 crimped fibre meets where it crosses another?
 
-Contact as fabmd's default fibre–fibre contact: Hooke k_n = k'·l0 with k' = 0.4·E·A/d²,
-k_t = 2/7·k_n, normal damping 0.3 of critical (tangential half), μ = 0.3, no rotation
+Contact as fabmd's default fibre–fibre contact (``ContactModel``'s coefficients): Hooke
+k_n = k'·l0 with k' = 0.4·E·A/d², k_t = 2/7·k_n, normal damping 0.3 of critical
+(tangential half), μ = 0.3, no rotation
 (``fix nve``), beads of one fibre do not touch. Pull at 3 % of the transverse wave speed
 sqrt(T_in/λ) after a load ramp; the ratio is averaged over the second half of a 3 d pull.
 B's registers: z0 = 0, l0/4 and l0/2 (A over a bead of B, between, in the groove).
@@ -28,6 +29,9 @@ import time
 import numpy as np
 
 from fabmd.engine.library import new_instance
+from fabmd.model.beads import BeadParameters
+from fabmd.model.contact import ContactModel
+from fabmd.scene.loading import SmoothStartSpeed
 
 D = 1e-4  # fibre diameter [m]
 E = 1e9  # modulus [Pa] (the force ratios do not depend on it)
@@ -65,21 +69,20 @@ def path(theta: float, straight: float, spacing: float) -> tuple[np.ndarray, flo
 
 def _loading(pts: np.ndarray, ramp: float, speed: float) -> list[str]:
     """The load T_in on A's first bead (ramped over ``ramp`` s), the pull of its last bead
-    (smooth start over ``ramp``, then ``speed``), and T_out as ``v_tout``."""
+    (smooth start over ``ramp`` once the load is on, then ``speed``), and T_out as
+    ``v_tout``. Both ramps are fabmd's own smooth start (:class:`SmoothStartSpeed`)."""
     t_load = (pts[0] - pts[1]) / np.linalg.norm(pts[0] - pts[1])
     t_pull = (pts[-1] - pts[-2]) / np.linalg.norm(pts[-1] - pts[-2])
+    pull = SmoothStartSpeed(speed, ramp)
     return ["group load_end id 1", f"group pulled id {len(pts)}",
              "group free subtract A pulled",
              "variable t equal time",
-             f"variable ramp equal \"(v_t<{ramp})*(1-cos(PI*v_t/{ramp}))/2+(v_t>={ramp})\"",
+             f"variable ramp equal \"{SmoothStartSpeed(1.0, ramp).lammps_ramp('t')}\"",
              f"variable lx equal {LOAD * t_load[0]}*v_ramp",
              f"variable ly equal {LOAD * t_load[1]}*v_ramp",
              f"variable tp equal \"(v_t>{ramp})*(v_t-{ramp})\"",
-             # smooth start over one ramp, then constant speed
-             f"variable u equal \"{speed}*((v_tp<{ramp})*(v_tp/2-{ramp}/(2*PI)*sin(PI*v_tp/{ramp}))"
-             f"+(v_tp>={ramp})*(v_tp-{ramp}/2))\"",
-             f"variable v equal \"{speed}*((v_tp<{ramp})*(1-cos(PI*v_tp/{ramp}))/2"
-             f"+(v_tp>={ramp}))\"",
+             f"variable u equal \"{pull.lammps_displacement('tp')}\"",
+             f"variable v equal \"{pull.lammps_velocity('tp')}\"",
              f"variable ux equal {t_pull[0]}*v_u", f"variable uy equal {t_pull[1]}*v_u",
              f"variable vx equal {t_pull[0]}*v_v", f"variable vy equal {t_pull[1]}*v_v",
              "variable zero equal 0.0",
@@ -102,10 +105,9 @@ def ratio(spacing_ratio: float, theta: float, register: float, pull_d: float = 3
     pts, l0 = path(theta, 12 * D, l0)
     mass = RHO * AREA * l0
     kb = EA / l0  # bond spring [N/m]; LAMMPS harmonic K = kb/2
-    kn = stiffness_factor * 0.4 * EA / D**2 * l0
-    m_eff = 0.5 * mass
-    gn = 0.3 * 2 * math.sqrt(kn / m_eff)
-    dt = 0.1 * 2 / math.sqrt((4 * kb + 6 * kn) / mass)
+    contact = ContactModel(friction=MU, normal_stiffness_pa=stiffness_factor * 0.4 * EA / D**2)
+    c = contact.pair_coefficients([BeadParameters(D, l0, mass, EA)])
+    dt = 0.1 * 2 / math.sqrt((4 * kb + 6 * c["kn"]) / mass)
     lam = RHO * AREA
     speed = speed_fraction * math.sqrt(LOAD / lam)
     length = len(pts) * l0
@@ -130,7 +132,8 @@ def ratio(spacing_ratio: float, theta: float, register: float, pull_d: float = 3
              f"set group all density {mass / (math.pi * D**3 / 6)}",
              "bond_style harmonic", f"bond_coeff 1 {kb / 2} {l0}"]
     cmds += [f"create_bonds single/bond 1 {i} {i + 1}" for i in range(1, n_a)]
-    cmds += [f"pair_style gran/hooke/history {kn} {2 / 7 * kn} {gn} {0.5 * gn} {MU} 1",
+    cmds += [f"pair_style {contact.pair_style()} {c['kn']} {c['kt']} {c['gamman']} "
+             f"{c['gammat']} {c['friction']} 1",
              "pair_coeff * *", "special_bonds lj 0 1 1",
              f"neighbor {0.2 * D} bin", "neigh_modify exclude molecule/intra all",
              "neigh_modify exclude type 2 2", f"timestep {dt}"]
