@@ -75,6 +75,20 @@ def test_interval_verdict_flags_inertia_and_kinetic_energy():
     assert cols["interval_inertia_share"][-1] == pytest.approx(last["inertia_share"])
 
 
+@pytest.mark.parametrize("share, trusted", [(0.05, False), (0.02, True)])
+def test_an_interval_whose_kinetic_energy_takes_5_percent_of_the_work_is_flagged(share, trusted):
+    """The inertia share was measured at 1.0-2.3x the interval's force error (Twintex and
+    plain-weave picture frames at two speeds, RESULTS): an interval that puts 5 % of its
+    work into kinetic energy reads its force about 5-10 % off and is not trusted; 2 % is."""
+    x, work, drag, kinetic, strain = synthetic_run(lambda s: 0 * s)
+    # the last interval (15-20: work 92.5) puts `share` of it into kinetic energy
+    dw = (20 + 200) - (15 + 112.5)
+    kinetic = kinetic + np.where(x > 15, share * dw * (x - 15) / 5, 0.0)
+    last = interval_verdict(x, work, drag, kinetic, strain, 5.0)["intervals"][-1]
+    assert last["inertia_share"] == pytest.approx(share, rel=1e-6)
+    assert last["ok"] is trusted
+
+
 def test_interval_without_work_is_not_judged():
     x = np.linspace(0, 10, 101)
     flat = np.zeros_like(x)
