@@ -14,9 +14,9 @@ crimped fibre meets where it crosses another?
 
 Contact as fabmd's default fibre–fibre contact (``ContactModel``'s coefficients): Hooke
 k_n = k'·l0 with k' = 0.4·E·A/d², k_t = 2/7·k_n, normal damping 0.3 of critical
-(tangential half), μ = 0.3, no rotation
-(``fix nve``), beads of one fibre do not touch. Pull at 3 % of the transverse wave speed
-sqrt(T_in/λ) after a load ramp; the ratio is averaged over the second half of a 3 d pull.
+(tangential half), μ = 0.3, no rotation (``fix nve``), beads of one fibre do not touch.
+Pull at 3 % of the transverse wave speed sqrt(T_in/λ) after a load ramp; the ratio is
+averaged over the second half of a 3 d pull.
 B's registers: z0 = 0, l0/4 and l0/2 (A over a bead of B, between, in the groove).
 """
 
