@@ -1,8 +1,8 @@
 """Adaptive loading benchmark: steps, wall time and curve difference against a fixed speed
 that is itself converged in speed.
 
-For each test, crimps the periodic cell of ``examples/plain_weave.toml`` once, cuts and
-relaxes the test's coupon once, then
+For each test, crimps the periodic cell of ``examples/plain_weave.toml`` (the drape:
+``examples/drape.toml``) once, cuts and relaxes the test's coupon once, then
 
 1. **reference**: runs the test at fixed speeds, the scene's ``speed_fraction`` times each
    of ``--speeds`` (halvings), and takes as the reference the fastest speed whose run agrees
@@ -25,7 +25,8 @@ fixed speed the largest report difference to the run at half of it.
 
 Report points: tension force at 4/5/6 % (to the example's 6 %; ``--fast``: to 8 %, at
 6/7/8 %, past that coupon's longer toe), picture frame F_norm at 10/20/30/40° (the issue's
-2 x 2-cell coupon), bias extension force at 10/20/30° (closed-form central angle).
+2 x 2-cell coupon), bias extension force at 10/20/30° (closed-form central angle), drape
+(``examples/drape.toml``: its blank and tools) punch force at 10/20/30 mm depth.
 ``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--write`` replaces
 the RESULTS section with this invocation's table (the section shipped holds two
 invocations' tables and their reading, written by hand). ``--out`` keeps the
@@ -60,12 +61,17 @@ from fabmd.scene.outputs import TrajectoryOutput  # noqa: E402
 from fabmd.scenefile import load_scene  # noqa: E402
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "plain_weave.toml"
+#: the drape runs on its own example (a loose glass fabric, one fibre per yarn, quarter
+#: blank), the other tests on the plain weave's coupons
+SCENES = {"drape": SCENE.parent / "drape.toml"}
 #: test -> (x column, y column, report x values, what they are)
 REPORT = {"tension": ("elongation_pct", "force_n", (4.0, 5.0, 6.0), "force at 4/5/6 %"),
           "picture-frame": ("shear_angle_deg", "normalised_force_n_m", (10.0, 20.0, 30.0, 40.0),
                             "F_norm at 10/20/30/40°"),
           "bias-extension": ("shear_angle_deg", "force_n", (10.0, 20.0, 30.0),
-                             "force at a central shear angle (closed form) of 10/20/30°")}
+                             "force at a central shear angle (closed form) of 10/20/30°"),
+          "drape": ("depth_m", "punch_force_n", (0.01, 0.02, 0.03),
+                    "punch force at 10/20/30 mm depth (whole blank)")}
 #: with ``--fast`` (1 fibre per yarn) the tension goes to 8 %, past that coupon's longer
 #: toe (about 5 %; RESULTS "Tension coupon length"), and reports at 6/7/8 %
 FAST_TENSION = ({"max_elongation_pct": 8.0}, (6.0, 7.0, 8.0), "force at 6/7/8 %")
@@ -131,7 +137,7 @@ def run_one(test_obj, coupon, out: Path, engine: Engine, test: str, reuse: bool,
     s = result.summary
     adaptive = s.get("adaptive_loading")
     xc, yc, _, _ = REPORT[test]
-    keep = [xc, yc] + [c for c in ("clamp_speed_m_s", "corner_speed_m_s")
+    keep = [xc, yc] + [c for c in ("clamp_speed_m_s", "corner_speed_m_s", "punch_speed_m_s")
                        if c in result.curve]
     run = {"steps": adaptive["steps"] if adaptive else s["steps"], "wall_s": wall,
            "curve": {c: np.asarray(result.curve[c]).tolist() for c in keep},
@@ -254,7 +260,7 @@ def main(argv=None) -> int:
     engine = Engine(progress=False)
     rows = []
     for test in args.tests:
-        scene = load_scene(SCENE)
+        scene = load_scene(SCENES.get(test, SCENE))
         if args.fast:
             scene = fast_scene(scene)
         coupon = prepared_coupon(scene, test, root / test, engine, args.reuse)

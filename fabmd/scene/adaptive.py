@@ -60,7 +60,7 @@ from ..errors import InputError
 from .energy import mean_sample_every
 from .plan import RunPlan
 from .quasi_static import INTERVAL_LIMITS
-from .templates import render
+from .templates import fmt, render
 
 #: largest boundary speed over the fibres' wave speed any driven test may reach (the limit
 #: of ``speed_fraction``)
@@ -144,15 +144,18 @@ class AdaptiveLoading:
 
 
 def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float,
-                  transit_s: float = 0.0) -> RunPlan:
+                  transit_s: float = 0.0, every_multiple: int = 1) -> RunPlan:
     """The fixed-speed ``plan`` made adaptive (see the module docstring); unchanged when
     ``loading`` is not adaptive. ``transit_s``: the axial wave transit time of the
-    specimen [s] (its length over the fibres' wave speed). ``extra`` keeps the fixed run's
-    steps and output interval, the travel and the control settings."""
+    specimen [s] (its length over the fibres' wave speed); ``every_multiple``: the output
+    interval is a multiple of it (a protocol that samples its means every n steps).
+    ``extra`` keeps the fixed run's steps and output interval, the travel and the control
+    settings."""
     if not loading.adaptive:
         return plan
     k = loading.max_speed_factor
-    every = max(1, int(plan.every // min(k, OUTPUT_SPEEDUP)))
+    n = every_multiple
+    every = n * max(1, int(plan.every // min(k, OUTPUT_SPEEDUP)) // n)
     steps = every * math.ceil(plan.steps / loading.min_speed_factor / every)
     transits = math.ceil(loading.control_transits * transit_s / (every * plan.time_step_s)
                          - 1e-9)  # not one more for a rounding error
@@ -171,7 +174,9 @@ def adaptive_plan(plan: RunPlan, loading: AdaptiveLoading, travel_m: float,
 
 
 def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
-                   power_floor_w: float, displacement: str = "u") -> str:
+                   power_floor_w: float, displacement: str = "u",
+                   kinetic: tuple[str, str] | None = None,
+                   memory_s: float | None = None) -> str:
     """The LAMMPS text of the adaptive speed (``lammps_templates/adaptive_speed.lmp``):
     it defines ``v_adapt_factor`` (the speed factor) and the halt at the travel; put it
     after the driven outputs (it reads ``external_ref``, ``v_p_damp``, ``c_ke_free``,
@@ -185,6 +190,12 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
             taken against it (times the speed factor); ``floor_force_n`` × the base speed
             where the loading sets it.
         displacement: the variable (without ``v_``) of the boundary's travel [m].
+        kinetic: (LAMMPS formula, what it is) of the kinetic measure held under
+            ``max_kinetic_ratio``; default KE/U with the energy floor (a drape, whose
+            fabric rides on the punch with a kinetic energy far above its strain energy,
+            gives its inertial force over the punch force instead).
+        memory_s: the time over which the drag's share is also averaged [s]; default the
+            drag time τ (a fabric the drag held back lags for about τ).
     """
     x = plan.extra
     interval = x["control_interval_steps"]
@@ -193,13 +204,15 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
     ln_up = math.log(x["max_speed_step"])
     if x.get("floor_force_n"):
         power_floor_w = x["floor_force_n"] * plan.speed_m_s
-    memory = max(1, math.ceil(plan.damping_time_s / (interval * plan.time_step_s) - 1e-9))
+    memory = max(1, math.ceil((memory_s or plan.damping_time_s) / (interval * plan.time_step_s)
+                              - 1e-9))
     return render("adaptive_speed", interval=interval, every=plan.every, memory=memory,
                   ln_max=math.log(x["max_speed_factor"]), max_factor=x["max_speed_factor"],
                   ln_min=math.log(x["min_speed_factor"]), min_factor=x["min_speed_factor"],
                   sample_every=sample, samples=interval // sample,
                   external_ref=external_ref, power_floor=power_floor_w,
-                  energy_floor=energy_floor_j,
+                  kinetic=kinetic[0] if kinetic else f"c_ke_free/(v_ebond+{fmt(energy_floor_j)})",
+                  kinetic_name=kinetic[1] if kinetic else "KE/U",
                   kinetic_limit=x["max_kinetic_ratio"],
                   target=x["target"], ramp_time=plan.ramp_time_s, gain=gain,
                   ln_up=f"{ln_up:.4g}", ln_down=f"{2 * ln_up:.4g}",

@@ -12,7 +12,8 @@ import numpy as np
 from ...model.bead_model import BeadModel
 from ...model.beads import BeadParameters, model_bead_parameters
 from ...scene import blocks
-from ...scene.templates import render
+from ...scene.adaptive import speed_commands
+from ...scene.templates import fmt, render
 from .geometry import DrapeGeometry, tool_geometry
 
 if TYPE_CHECKING:
@@ -79,6 +80,48 @@ def tool_walls(test: Drape, beads: list[BeadParameters]) -> str:
                      for tool, (region, group) in zones.items())
 
 
+def adaptive_motion(test: Drape, model: BeadModel, g: DrapeGeometry) -> tuple[str, str, str]:
+    """(punch travel, punch speed, LAMMPS text) of the adaptive punch
+    (:mod:`fabmd.scene.adaptive`): the speed is the smooth start's times the adapted factor,
+    the travel its integral (a ``fix controller`` that adds speed · dt each step). Its
+    kinetic measure is the fabric's inertial force over the punch force (the drape's own
+    quasi-static measure), held under ``max_kinetic_ratio``; floor force of that and of the
+    drag share: a hundredth of the holder force (this model's share); the drag share's
+    memory a tenth of the draw (the other tests' drag time), not the drape's drag time."""
+    plan = test.plan(model)
+    load = test.loading(model)
+    floor_force = 0.01 * test.holder_share_n(g)
+    interval = plan.extra["control_interval_steps"]
+    sample = SAMPLE_EVERY  # the interval is a multiple of it (Drape.plan_loading)
+    text = "\n".join((
+        "# the adaptive punch: its travel integrates its speed (fix controller: cv += "
+        "-dt*v_punch_vz each step, punch_vz = -speed)",
+        "variable        punch_travel_int internal 0.0",
+        "fix             punch_integrate all controller 1 1.0 1.0 0.0 0.0 v_punch_vz 0.0 "
+        "punch_travel_int",
+        "variable        p_damp equal c_p_damp",
+        "# the kinetic measure: the fabric's inertial force (its downward momentum's change "
+        "over a control",
+        "# interval) over the punch force (at least the floor force): the fabric riding on "
+        "the punch has",
+        "# a kinetic energy far above its strain energy, so KE/U would hold the speed at its "
+        "base",
+        f"fix             adapt_pz all ave/time {interval} 1 {interval} v_pz ave window 2",
+        f"fix             adapt_punch all ave/time {sample} {interval // sample} {interval} "
+        "v_punch_force",
+        f"variable        adapt_inertia equal \"abs(2*(v_pz-f_adapt_pz))/"
+        f"{fmt(interval * plan.time_step_s)}/ternary(f_adapt_punch>{fmt(floor_force)},"
+        f"f_adapt_punch,{fmt(floor_force)})\"",
+        speed_commands(plan, "v_p_ext", 0.0, floor_force * plan.speed_m_s,
+                       displacement="punch_travel",
+                       kinetic=("v_adapt_inertia", "the fabric's inertial force over the "
+                                "punch force"),
+                       # the drape's drag time is its whole draw (a light drag): averaged over
+                       # it, the early draw's drag share would hold the speed to the end
+                       memory_s=plan.duration_s / 10)))
+    return "v_punch_travel_int", f"({load.lammps_velocity()})*v_adapt_factor", text
+
+
 def input_text(test: Drape, model: BeadModel) -> str:
     """The whole LAMMPS input of ``test`` on ``model`` (a blank from ``Drape.prepare``)."""
     g = tool_geometry(test, model)
@@ -87,6 +130,10 @@ def input_text(test: Drape, model: BeadModel) -> str:
     beads = model_bead_parameters(model)
     steps = test.steps(model)
     control = test.holder_control(model, g)
+    every = test.every(model)  # a multiple of SAMPLE_EVERY, adaptive or not
+    displacement, velocity, adaptive = load.lammps_displacement(), load.lammps_velocity(), ""
+    if test.loading_speed.adaptive:
+        displacement, velocity, adaptive = adaptive_motion(test, model, g)
     text = render(
         "drape", symmetry=test.symmetry, radius=g.radius_m, punch_z=g.punch_z_m,
         z_die=g.z_die_m, die_radius=g.die_radius_m, holder_radius=g.holder_radius_m,
@@ -105,12 +152,13 @@ def input_text(test: Drape, model: BeadModel) -> str:
         clamp_every=max(1, test.clamp.check_every // 5),
         holder_integral_time=control["integral_time_s"],
         **clamp_values(test, model, g),
-        displacement=load.lammps_displacement(), velocity=load.lammps_velocity(),
+        displacement=displacement, velocity=velocity,
         gamma=test.gamma(model), sample_every=SAMPLE_EVERY,
-        samples_per_interval=test.every(model) // SAMPLE_EVERY, every=test.every(model),
+        samples_per_interval=every // SAMPLE_EVERY, every=every,
         strain_energy="ebond+eangle" if len(model.angles) else "ebond",
         thermo_every=max(test.every(model), steps // 20))
     # the drape's guards sit in its template (before the clamping phase)
     return test.scene_text(model, dt, text, after=(
-        test.trajectory.commands(steps), render("run", steps=steps),
+        *([adaptive] if adaptive else []), test.trajectory.commands(steps),
+        render("run", steps=steps),
         test.trajectory.final_commands(), render("finish", final_data="final.data")))

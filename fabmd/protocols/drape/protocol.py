@@ -10,12 +10,16 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from ... import inputs
 from ...errors import InputError
 from ...model.bead_model import BeadModel
 from ...model.beads import model_bead_parameters
 from ...model.contact import ToolContact
-from ...scene.energy import ContactPower
+from ...scene.adaptive import AdaptiveLoading, adaptive_plan
+from ...scene.energy import MEAN_SAMPLE_EVERY, ContactPower
+from ...scene.plan import RunPlan
 from ...scene.quasi_static import QuasiStatic
 from ..driven import DrivenResult, DrivenTest
 from .geometry import (
@@ -74,6 +78,9 @@ class Drape(DrivenTest):
         tool_zones: give each tool's contact only to the beads that can reach it
             (default True); False gives punch and die contact to every bead, which changes
             nothing but the cost (``benchmarks/drape.py`` measures both).
+        loading_speed: adaptive punch speed (opt-in, :mod:`fabmd.scene.adaptive`); the
+            punch's travel is then the integral of its speed, and the drag share, KE/U
+            floors are taken at a hundredth of the holder force.
     """
 
     protocol = PROTOCOL
@@ -101,6 +108,7 @@ class Drape(DrivenTest):
     report_depths_m: tuple[float, ...] = ()
     modulus_scale: float = 1.0
     tool_zones: bool = True
+    loading_speed: AdaptiveLoading = field(default_factory=AdaptiveLoading)
 
     def check_fields(self) -> None:
         r = inputs.positive("drape.punch_radius_m", self.punch_radius_m)
@@ -127,6 +135,10 @@ class Drape(DrivenTest):
         for d in self.report_depths_m:
             inputs.positive("drape.report_depths_m", d)
         inputs.in_range("drape.modulus_scale", self.modulus_scale, 0, 1, low_open=True)
+        if not isinstance(self.loading_speed, AdaptiveLoading):
+            raise InputError(f"drape.loading_speed must be an AdaptiveLoading, got "
+                             f"{self.loading_speed!r}")
+        self.loading_speed.check_speed("drape", self.speed_fraction)
 
     # -- geometry -------------------------------------------------------------------------
     @property
@@ -173,6 +185,16 @@ class Drape(DrivenTest):
 
     def travel_from(self, gap_m: float) -> float:
         return self.depth_m + gap_m
+
+    def plan_loading(self, plan: RunPlan, model: BeadModel) -> RunPlan:
+        """Adaptive loading (:func:`fabmd.scene.adaptive.adaptive_plan`) when asked; the
+        wave transit is the blank's larger side over the fibres' wave speed, the output
+        interval a multiple of :data:`SAMPLE_EVERY` and of the controller's
+        ``MEAN_SAMPLE_EVERY`` (the means' sampling: every step would double the cost)."""
+        size = float(np.ptp(model.positions[:, :2], axis=0).max())
+        return adaptive_plan(plan, self.loading_speed, self.travel_m(model),
+                             size / self.wave_speed_m_s(model),
+                             every_multiple=math.lcm(SAMPLE_EVERY, MEAN_SAMPLE_EVERY))
 
     def plan_contacts(self) -> tuple:
         """The time step is bounded by the stiffer of fibre–fibre and tool contact."""

@@ -15,6 +15,7 @@ from ...model.bead_model import BeadModel
 from ...model.contact import ContactModel
 from ...results.curves import values_at
 from ...results.folder import read_print_file
+from ...scene.adaptive import adaptive_summary, window_mean, window_width_m
 from ...scene.energy import ContactPower
 from ..common import overlap_summary
 from ..driven import DrivenResult
@@ -235,8 +236,16 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
     plan = test.read_plan(run_dir, model)  # what the run was written with
     dt = plan.time_step_s
     out = read_outputs(run_dir, plan.every, dt, monitor)
+    window = window_width_m(plan)
+    if window is not None:  # adaptive: the tool forces over the fixed run's interval travel
+        for name in ("punch_force_n", "holder_force_n", "die_force_n"):
+            out.columns[name] = window_mean(out["punch_travel_m"], out[name], window)
     curve = force_curve(out, g, plan.every, dt)
     travel, depth = curve["punch_travel_m"], curve["depth_m"]
+    speed = None
+    if window is not None:  # the adapted punch speed, from its travel
+        speed = np.gradient(travel, out["time_s"]) if len(travel) > 2 else 0 * travel
+        curve["punch_speed_m_s"] = speed
     punch = curve["punch_force_n"]
     started = started_mask(out, plan.loading, travel / test.travel_m(model))
     holder = holder_summary(run_dir, out, test, model, g, dt)
@@ -254,6 +263,7 @@ def reduce(run_dir: Path, model: BeadModel, test: Drape,
              if inertia["mean_inertial_force_n"] is not None and inertia["mean_punch_force_n"]
              else None)
     summary = setup_summary(run_dir, test, model, g, plan, max_bond_strain(model, final))
+    summary.update(adaptive_summary(plan, out["step"], out["time_s"], speed))
     summary.update({
         "max_punch_force_n": float(punch.max()),
         "final_punch_force_n": float(punch[depth >= 0.95 * depth[-1]].mean()),
