@@ -86,11 +86,12 @@ def adaptive_motion(test: Drape, model: BeadModel, g: DrapeGeometry) -> tuple[st
     the travel its integral (a ``fix controller`` that adds speed · dt each step). Its
     kinetic measure is the fabric's inertial force over the punch force (the drape's own
     quasi-static measure), held under ``max_kinetic_ratio``; floor force of that and of the
-    drag share: a hundredth of the holder force (this model's share); the drag share's
-    memory a tenth of the draw (the other tests' drag time), not the drape's drag time."""
+    drag share: ``floor_force_n``, default a hundredth of the holder force (this model's
+    share); the drag share's memory a tenth of the draw (the other tests' drag time), not
+    the drape's drag time."""
     plan = test.plan(model)
     load = test.loading(model)
-    floor_force = 0.01 * test.holder_share_n(g)
+    floor_force = test.loading_speed.floor_force_n or 0.01 * test.holder_share_n(g)
     interval = plan.extra["control_interval_steps"]
     sample = SAMPLE_EVERY  # the interval is a multiple of it (Drape.plan_loading)
     text = "\n".join((

@@ -79,8 +79,8 @@ class Drape(DrivenTest):
             (default True); False gives punch and die contact to every bead, which changes
             nothing but the cost (``benchmarks/drape.py`` measures both).
         loading_speed: adaptive punch speed (opt-in, :mod:`fabmd.scene.adaptive`); the
-            punch's travel is then the integral of its speed, and the drag share, KE/U
-            floors are taken at a hundredth of the holder force.
+            punch's travel is then the integral of its speed, and its kinetic measure the
+            fabric's inertial force over the punch force (:func:`.input.adaptive_motion`).
     """
 
     protocol = PROTOCOL
