@@ -13,7 +13,7 @@ from ...model.bead_model import BeadModel
 from ...model.beads import BeadParameters, model_bead_parameters
 from ...scene import blocks
 from ...scene.adaptive import speed_commands
-from ...scene.templates import fmt, render
+from ...scene.templates import render
 from .geometry import DrapeGeometry, tool_geometry
 
 if TYPE_CHECKING:
@@ -93,33 +93,16 @@ def adaptive_motion(test: Drape, model: BeadModel, g: DrapeGeometry) -> tuple[st
     load = test.loading(model)
     floor_force = test.loading_speed.floor_force_n or 0.01 * test.holder_share_n(g)
     interval = plan.extra["control_interval_steps"]
-    sample = SAMPLE_EVERY  # the interval is a multiple of it (Drape.plan_loading)
-    text = "\n".join((
-        "# the adaptive punch: its travel integrates its speed (fix controller: cv += "
-        "-dt*v_punch_vz each step, punch_vz = -speed)",
-        "variable        punch_travel_int internal 0.0",
-        "fix             punch_integrate all controller 1 1.0 1.0 0.0 0.0 v_punch_vz 0.0 "
-        "punch_travel_int",
-        "variable        p_damp equal c_p_damp",
-        "# the kinetic measure: the fabric's inertial force (its downward momentum's change "
-        "over a control",
-        "# interval) over the punch force (at least the floor force): the fabric riding on "
-        "the punch has",
-        "# a kinetic energy far above its strain energy, so KE/U would hold the speed at its "
-        "base",
-        f"fix             adapt_pz all ave/time {interval} 1 {interval} v_pz ave window 2",
-        f"fix             adapt_punch all ave/time {sample} {interval // sample} {interval} "
-        "v_punch_force",
-        f"variable        adapt_inertia equal \"abs(2*(v_pz-f_adapt_pz))/"
-        f"{fmt(interval * plan.time_step_s)}/ternary(f_adapt_punch>{fmt(floor_force)},"
-        f"f_adapt_punch,{fmt(floor_force)})\"",
-        speed_commands(plan, "v_p_ext", 0.0, floor_force * plan.speed_m_s,
-                       displacement="punch_travel",
-                       kinetic=("v_adapt_inertia", "the fabric's inertial force over the "
-                                "punch force"),
-                       # the drape's drag time is its whole draw (a light drag): averaged over
-                       # it, the early draw's drag share would hold the speed to the end
-                       memory_s=plan.duration_s / 10)))
+    speed = speed_commands(
+        plan, "v_p_ext", 0.0, floor_force * plan.speed_m_s, displacement="punch_travel",
+        kinetic=("v_adapt_inertia", "the fabric's inertial force over the punch force"),
+        # the drape's drag time is its whole draw (a light drag): averaged over it, the
+        # early draw's drag share would hold the speed to the end
+        memory_s=plan.duration_s / 10)
+    # the interval is a multiple of SAMPLE_EVERY (Drape.plan_loading)
+    text = render("drape_adaptive", interval=interval, interval_s=interval * plan.time_step_s,
+                  floor_force=floor_force, sample_every=SAMPLE_EVERY,
+                  samples=interval // SAMPLE_EVERY, speed=speed)
     return "v_punch_travel_int", f"({load.lammps_velocity()})*v_adapt_factor", text
 
 
