@@ -95,8 +95,13 @@ def sections(pos: np.ndarray, data: dict, inside: np.ndarray,
         sel = (yarn_of_bead == yarn) & inside
         q, fib = pos[sel], data["fibre"][sel]
         n_fibres = len(np.unique(fib))
+        # the yarn's direction: its fibres' end-to-end chords (the cloud's principal axis
+        # tilts once the interior is a parallelogram)
+        chords = [q[fib == f][-1, :2] - q[fib == f][0, :2] for f in np.unique(fib)]
+        chords = [c if c @ chords[0] >= 0 else -c for c in chords]
+        axis = np.sum(chords, axis=0)
+        axis /= np.linalg.norm(axis)
         c = q[:, :2] - q[:, :2].mean(axis=0)
-        axis = np.linalg.svd(c, full_matrices=False)[2][0]
         along, across = c @ axis, c @ np.array([-axis[1], axis[0]])
         for start in np.arange(along.min(), along.max(), STATION_M):
             m = (along >= start) & (along < start + STATION_M)

@@ -322,3 +322,38 @@ def test_a_bead_chain_pulled_over_a_crossing_chain_follows_the_capstan_equation(
     exact = math.exp(cap.MU * math.pi / 2)
     assert abs(mean - exact) < 0.08 * (exact - 1)
     assert low < exact < high and high - low > 0.2 * (exact - 1)
+
+
+def test_yarn_sections_read_the_width_of_affinely_sheared_yarns_as_w_cos_gamma():
+    """``benchmarks/yarn_sections.py`` on two synthetic yarns of 7 straight fibres along x,
+    sheared affinely (the crossing direction y turns by γ, lengths along it kept): their
+    width across reads w·cos γ, their height the fibres' z spread; a yarn cut by the
+    interior's edge is left out."""
+    bench = load_benchmark("yarn_sections")
+    spacing, n_beads, w = 2.5e-3, 81, 1.2e-3
+    x = np.linspace(0.0, 10e-3, n_beads)
+    rows, fibre, yarn_of_fibre = [], [], []
+    for yarn, y0 in enumerate((3.75e-3, 6.25e-3)):
+        for k, dy in enumerate(np.linspace(-w / 2, w / 2, 7)):
+            z = 0.1e-3 * (k % 2)  # two rows: a height of 0.1 mm
+            rows.append(np.column_stack([x, np.full(n_beads, y0 + dy), np.full(n_beads, z)]))
+            fibre += [len(yarn_of_fibre) + 1] * n_beads
+            yarn_of_fibre.append(yarn + 1)
+    p0 = np.vstack(rows)
+    data = {"fibre": np.array(fibre), "fibre_yarn": np.array(yarn_of_fibre),
+            "free_side_m": 4 * spacing}
+    for gamma in (0.0, 20.0, 40.0):
+        g = np.radians(gamma)
+        sheared = p0.copy()
+        sheared[:, 0] = p0[:, 0] + p0[:, 1] * np.sin(g)
+        sheared[:, 1] = p0[:, 1] * np.cos(g)
+        data["pos"] = np.stack([p0, sheared])
+        inside = bench.interior(data)
+        yarns = bench.whole_yarns(data, inside)
+        assert yarns == [1, 2]
+        width, height = bench.sections(sheared, data, inside, yarns)
+        assert width == pytest.approx(w * np.cos(g), rel=1e-6)
+        assert height == pytest.approx(0.1e-3, rel=1e-6)
+    # an interior that cuts the second yarn's fibres leaves it out
+    data["free_side_m"] = 2 * (6.25e-3 - 5e-3) / bench.CENTRAL + 1e-9
+    assert bench.whole_yarns(data, bench.interior(data)) != [1, 2]
