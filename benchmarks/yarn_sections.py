@@ -24,9 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from fabmd.analysis.trajectory_file import open_trajectory, read_lengths
+
 STATION_M = 0.25e-3  # length of a station along a yarn
 CENTRAL = 0.8  # share of the free square's half side that counts as its interior
-UNITS = {"nm": 1e-9, "m": 1.0, "mm": 1e-3, "um": 1e-6}
 
 
 def run_folder(path: Path) -> Path:
@@ -38,13 +39,8 @@ def run_folder(path: Path) -> Path:
 def read(folder: Path) -> dict:
     """Positions [m] per frame, frame times, bonds and their forces, fibre and yarn ids,
     and the curve's angle and F_norm against time."""
-    import h5py
-
-    with h5py.File(folder / "trajectory.h5", "r") as f:
-        node = f["particles/all/position/value"]
-        unit = node.attrs.get("unit", "m")
-        unit = unit.decode() if isinstance(unit, bytes) else unit
-        data = {"pos": node[:] * UNITS[unit],
+    with open_trajectory(folder / "trajectory.h5") as f:  # checks the format
+        data = {"pos": read_lengths(f["particles/all/position/value"]),
                 "time": f["observables/bond_force/time"][:],
                 "bond_force": f["observables/bond_force/value"][:],
                 "bonds": f["connectivity/bonds"][:],
