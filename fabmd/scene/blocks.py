@@ -294,14 +294,18 @@ def tool_plane(tool: ToolContact, beads: list[BeadParameters], axis: str,
 
 def _overlap_families(model: BeadModel, contact_model: ContactModel,
                       beads: list[BeadParameters], d_min: float) -> str:
-    """Overlap lines of the within-family law with several bead diameters: each family's
-    own pairs by distance, crossings by force (templates overlap_pair_family[ies])."""
+    """Overlap lines of the within-family law: each family's own pairs by distance, counted
+    from the law's hard core (its pairs are meant to close to the packing limit, so only
+    what passes the core is an overlap: 1 − r_min/r_core), crossings by force (templates
+    overlap_pair_family[ies])."""
     lines, overlap = [], "v_fabmd_overlap_cross"
-    for i in range(1, len(model.family_names) + 1):
-        d = model.diameters[model.atom_types == i]
-        if d.size:
-            lines.append(render("overlap_pair_family", i=i, diameter=float(d.max())))
-            overlap = f"ternary(v_fabmd_overlap_{i}>{overlap},v_fabmd_overlap_{i},{overlap})"
+    k_cross = contact_model.crossing_stiffness_pa(beads)
+    for i, family in enumerate(model.family_names, start=1):
+        if not np.any(model.atom_types == i):
+            continue
+        core = contact_model.family_law(family).core_spacing_m(k_cross)
+        lines.append(render("overlap_pair_family", i=i, core=core))
+        overlap = f"ternary(v_fabmd_overlap_{i}>{overlap},v_fabmd_overlap_{i},{overlap})"
     return render("overlap_pair_families", family_lines="\n".join(lines), overlap=overlap,
                   kn=fmt(contact_model.normal_stiffness_n_per_m(beads)), diameter=d_min)
 
@@ -314,6 +318,9 @@ def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
     Fibre–fibre pairs: with one bead diameter d in the model, overlap/d = 1 − r_min/d over
     pairs in contact (exact); with several, the overlap follows from the largest normal
     contact force through k_n and is divided by the smallest diameter (an upper bound).
+    With the within-family law, a family's own pairs count only what passes the law's hard
+    core, 1 − r_min/r_core (they close to the packing limit by design), and crossings
+    follow from the force as above.
     Tools: the fixes named in ``tool_fixes`` must be ``fix wall/gran[/region] ... contacts``
     (:func:`tool_region`, :func:`tool_plane`); overlap/d = (r − distance to the contact
     point)/(2r). Writes ``step pair_overlap_ratio tool_overlap_ratio`` to ``file`` for
@@ -326,10 +333,10 @@ def overlap_monitor(model: BeadModel, contact_model: ContactModel | None,
         return "# no contact in this scene: no overlap monitor"
     if pair:
         d_min = float(model.diameters.min())
-        if np.ptp(model.diameters) <= 1e-9 * d_min:
-            pair_lines = render("overlap_pair_distance", diameter=d_min)
-        elif contact_model.within_family_law is not None:
+        if contact_model.within_family_law is not None:
             pair_lines = _overlap_families(model, contact_model, beads, d_min)
+        elif np.ptp(model.diameters) <= 1e-9 * d_min:
+            pair_lines = render("overlap_pair_distance", diameter=d_min)
         else:
             c = contact_model.pair_coefficients(beads)
             if contact_model.normal == "hooke":  # split contact: the softer pair bounds it
