@@ -119,13 +119,9 @@ class Config:
 
     def scene(self, base: Scene) -> Scene:
         """``base`` discretised and loaded as this configuration says."""
+        base = base.rediscretised(self.n_fibres, self.spacing_ratio)
         fabric = base.fabric
-        specs = {fam: dataclasses.replace(spec, n_fibres=self.n_fibres,
-                                          spacing_m=None if spec.count_per_m else spec.spacing_m)
-                 for fam, spec in fabric.specs().items()}
-        fabric = dataclasses.replace(fabric, **specs)
-        disc = dataclasses.replace(base.discretisation, spacing_ratio=self.spacing_ratio,
-                                   mass_scaling=self.mass_scaling)
+        disc = dataclasses.replace(base.discretisation, mass_scaling=self.mass_scaling)
         contact = base.contact
         if self.contact_factor != 1.0:
             # diagnostic variants scale the contact through the legacy per-bead factor

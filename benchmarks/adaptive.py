@@ -79,10 +79,7 @@ FAST_TENSION = ({"max_elongation_pct": 8.0}, (6.0, 7.0, 8.0), "force at 6/7/8 %"
 
 def fast_scene(scene):
     """The scene with one fibre per yarn (``--fast``; s/d stays the scene's)."""
-    specs = {fam: dataclasses.replace(spec, n_fibres=1,
-                                      spacing_m=None if spec.count_per_m else spec.spacing_m)
-             for fam, spec in scene.fabric.specs().items()}
-    return dataclasses.replace(scene, fabric=dataclasses.replace(scene.fabric, **specs))
+    return scene.with_fibres(1)
 
 
 def prepared_coupon(scene, test: str, root: Path, engine: Engine, reuse: bool) -> BeadModel:

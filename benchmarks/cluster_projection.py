@@ -114,12 +114,9 @@ def timing_breakdown(log_text: str) -> dict:
 
 # ---- the measurement -------------------------------------------------------------------
 def with_fibres(scene, n: int):
-    """``scene`` with ``n`` virtual fibres in every yarn family (s/d, tex unchanged)."""
-    fabric = scene.fabric
-    specs = {fam: dataclasses.replace(spec, n_fibres=n,
-                                      spacing_m=None if spec.count_per_m else spec.spacing_m)
-             for fam, spec in fabric.specs().items()}
-    return dataclasses.replace(scene, fabric=dataclasses.replace(fabric, **specs))
+    """``scene`` with ``n`` virtual fibres in every yarn family (s/d, tex unchanged; the
+    contact's laws on the new fibre: :meth:`fabmd.scenefile.Scene.with_fibres`)."""
+    return scene.with_fibres(n)
 
 
 def fixed_steps(text: str, steps: int) -> str:
@@ -310,7 +307,8 @@ def ranks_at_efficiency(model: CostModel, sheet: Sheet, efficiency: float = EFFI
 def per_fibres(scene, contacts, policy) -> dict[str, dict]:
     """Per fibre count of :data:`FIBRES`: the stable time step [s] (fabmd's own) and each
     family's bead spacing and the largest bead diameter [m], from the yarn specs alone
-    (no model is built)."""
+    (no model is built). ``contacts``: the fabric's contact first (replaced by the scene's
+    own at each count: a compaction law's pair forces follow the fibre), then the tools'."""
     from fabmd.model.fabric_model import family_beads
     from fabmd.model.timestep import stable_time_step_s
 
@@ -319,7 +317,8 @@ def per_fibres(scene, contacts, policy) -> dict[str, dict]:
         s = with_fibres(scene, n)
         fams = family_beads(s.fabric, s.discretisation)
         beads = [f.beads for f in fams.values()]
-        out[str(n)] = {"time_step_s": stable_time_step_s(beads, contacts, policy),
+        own = (s.contact, *list(contacts)[1:])
+        out[str(n)] = {"time_step_s": stable_time_step_s(beads, own, policy),
                        "spacing_m": {fam: f.beads.bond_length_m for fam, f in fams.items()},
                        "diameter_m": max(b.diameter_m for b in beads)}
     return out

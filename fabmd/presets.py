@@ -86,18 +86,10 @@ def apply_preset(scene: Scene, name: str) -> Scene:
     if name not in PRESETS:
         raise InputError(f"preset must be one of {', '.join(PRESETS)}, got {name!r}")
     preset = PRESETS[name]
-    fabric = scene.fabric
     if preset.direction and not _moves(scene, preset):
         preset = dataclasses.replace(preset, n_fibres=None, spacing_ratio=None)
-    if preset.n_fibres is not None:
-        # YarnSpec keeps both its count and the spacing derived from it; pass one
-        specs = {fam: dataclasses.replace(spec, n_fibres=preset.n_fibres,
-                                          spacing_m=None if spec.count_per_m else spec.spacing_m)
-                 for fam, spec in fabric.specs().items()}
-        fabric = dataclasses.replace(fabric, **specs)
-    disc = scene.discretisation
-    if preset.spacing_ratio is not None:
-        disc = dataclasses.replace(disc, spacing_ratio=preset.spacing_ratio)
+    # the contact's laws follow the new virtual fibre
+    scene = scene.rediscretised(preset.n_fibres, preset.spacing_ratio)
     protocols = {k: dict(v) for k, v in scene.protocols.items()}
     if preset.speed_factor != 1.0:
         from .pipeline import build_protocol
@@ -111,6 +103,5 @@ def apply_preset(scene: Scene, name: str) -> Scene:
                 except InputError:  # a test this install does not have
                     continue
             protocols.setdefault(table, {})["speed_fraction"] = current * preset.speed_factor
-    return dataclasses.replace(scene, fabric=fabric, discretisation=disc, protocols=protocols,
-                               title=f"{scene.title} [{name}]" if name != "default"
-                               else scene.title)
+    title = f"{scene.title} [{name}]" if name != "default" else scene.title
+    return dataclasses.replace(scene, protocols=protocols, title=title)

@@ -156,12 +156,43 @@ class Scene:
     protocols: dict = field(default_factory=dict)
     title: str = ""
     source: str | None = None
+    #: ``[contact]`` as given (None when built in Python): rebuilt on a new fibre
+    contact_table: dict | None = field(default=None, repr=False, compare=False)
 
     def model(self, check: bool = True):
         """Render the fabric into a :class:`~fabmd.model.bead_model.BeadModel`."""
         from .model.fabric_model import render_fabric
 
         return render_fabric(self.fabric, self.discretisation, check=check)
+
+    def with_fibres(self, n_fibres: int) -> Scene:
+        """This scene with ``n_fibres`` virtual fibres in every yarn family (tex, counts and
+        s/d unchanged); see :meth:`rediscretised`."""
+        return self.rediscretised(n_fibres=n_fibres)
+
+    def rediscretised(self, n_fibres: int | None = None,
+                      spacing_ratio: float | None = None) -> Scene:
+        """This scene with ``n_fibres`` virtual fibres in every yarn family and bead spacing
+        ratio ``spacing_ratio`` (None: as it is; tex and counts unchanged). A contact
+        derived from a compaction law (``within_family``, ``compaction``) is derived again
+        for the new virtual fibre: the law is the yarn's, its pair forces the fibre's."""
+        fabric, disc = self.fabric, self.discretisation
+        if n_fibres is not None:
+            # YarnSpec keeps both its count and the spacing derived from it; pass one
+            specs = {fam: dataclasses.replace(spec, n_fibres=n_fibres, spacing_m=None
+                                              if spec.count_per_m else spec.spacing_m)
+                     for fam, spec in fabric.specs().items()}
+            fabric = dataclasses.replace(fabric, **specs)
+        if spacing_ratio is not None:
+            disc = dataclasses.replace(disc, spacing_ratio=spacing_ratio)
+        contact = self.contact
+        if self.contact_table is not None:
+            contact = _contact(self.contact_table, fabric, disc, self.source or "scene")
+        elif n_fibres is not None and (contact.within_family_law is not None
+                                       or contact.within_family_stiffness_pa is not None):
+            raise InputError("Scene.rediscretised: this scene's contact was built in Python "
+                             "from a compaction law; build it again for the new fibre")
+        return dataclasses.replace(self, fabric=fabric, discretisation=disc, contact=contact)
 
     def to_dict(self) -> dict:
         """JSON-able resolved scene (SI numbers), protocol sections as given."""
@@ -360,7 +391,8 @@ def parse_scene(data: dict, source: str = "scene") -> Scene:
     if not isinstance(title, str):
         raise InputError(f"{where}: title must be text, got {title!r}")
     return Scene(fabric=fabric, discretisation=disc, contact=contact, materials=materials,
-                 protocols=protocols, title=title, source=source)
+                 protocols=protocols, title=title, source=source,
+                 contact_table=dict(_section(data, "contact", where)))
 
 
 def _materials(data: dict, where: str) -> dict:

@@ -191,7 +191,8 @@ def test_lammps_reads_the_fabric_and_bonds_are_at_rest(tmp_path, example, period
         'print "atoms $(atoms) bonds $(bonds) bond_energy_j $(c_bond_energy:%.6e)" '
         'file check.txt screen no',
     ])
-    run_dir = write_run_folder(tmp_path / "run", "check", model, text, {})
+    run_dir = write_run_folder(tmp_path / "run", "check", model, text, {},
+                               files=blocks.contact_files(scene.contact, beads))
     Engine(progress=False).run(run_dir, "in.check")
     words = (run_dir / "check.txt").read_text().split()
     got = {k: float(v) for k, v in zip(words[::2], words[1::2], strict=True)}

@@ -128,11 +128,14 @@ def test_steps_and_beads_at_more_fibres_follow_the_plan_built_there(bench):
     protocol = protocol_stage(scene, "tension")
     one = bench.with_fibres(scene, 1)
     model = tile(periodic_cell(one), 3, 1, periodic=False)
-    target = bench.describe_target("t", "tension", model, protocol.plan(model).steps, 0,
-                                   bench.per_fibres(one, protocol.plan_contacts(),
-                                                    protocol.time_step))
+    one_protocol = protocol_stage(one, "tension")  # its contact law on the one-fibre fibre
+    target = bench.describe_target("t", "tension", model, one_protocol.plan(model).steps, 0,
+                                   bench.per_fibres(one, one_protocol.plan_contacts(),
+                                                    one_protocol.time_step))
     sheet, steps = bench.at_fibres(target, 7)
     seven = tile(periodic_cell(bench.with_fibres(scene, 7)), 3, 1, periodic=False)
     assert sheet.beads == pytest.approx(seven.n_beads, rel=0.03)
-    assert steps == pytest.approx(protocol.plan(seven).steps, rel=0.03)
-    assert bench.at_fibres(target, 1)[1] == protocol.plan(model).steps
+    # the loading time is not the same: the gauge follows the clamped beads' size (at one
+    # fibre 0.8 mm beads; on the staggered example 2.76e-4 s at 1 fibre, 2.94e-4 s at 7)
+    assert steps == pytest.approx(protocol.plan(seven).steps, rel=0.05)
+    assert bench.at_fibres(target, 1)[1] == one_protocol.plan(model).steps

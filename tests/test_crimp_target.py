@@ -14,6 +14,9 @@ from fabmd.results.measure import family_crimp
 
 from .fabrics import parallel_fibres, plain_weave_cell
 
+#: the plain-weave example's crimp lines (a weaving-tension search from −6.8 %)
+EXAMPLE_CRIMP = 'target_tension = "1 cN/tex"\nexpansion = { warp = -0.068, weft = -0.068 }'
+
 
 def test_rest_crimp_is_the_loose_crimp_of_an_unstressed_fabric():
     cell = plain_weave_cell()
@@ -184,9 +187,9 @@ def test_scene_file_targets_on_the_example_cell(tmp_path):
     from fabmd.scenefile import load_scene
 
     text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
-    assert "expansion = { warp = -0.09, weft = -0.09 }" in text
+    assert EXAMPLE_CRIMP in text
     scene_file = tmp_path / "targets.toml"
-    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+    scene_file.write_text(text.replace(EXAMPLE_CRIMP,
                                        'target_crimp_pct = { warp = 1.0, weft = "auto" }'))
     scene = load_scene(scene_file)
     cell = periodic_cell(scene)
@@ -196,7 +199,7 @@ def test_scene_file_targets_on_the_example_cell(tmp_path):
         "warp": pytest.approx(1.01 / (1 + c0["warp"]) - 1),
         "weft": pytest.approx(1.03 / (1 + c0["weft"]) - 1)}
     assert "crimp" in crimp.input_text(cell)
-    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+    scene_file.write_text(text.replace(EXAMPLE_CRIMP,
                                        "target_crimp_pct = { warp = 0 }"))
     with pytest.raises(InputError, match="target_crimp_pct.warp = 0: the warp yarns are "
                                          "woven .* cannot be pulled straight"):
@@ -211,7 +214,7 @@ def test_calibration_refuses_a_scene_whose_crimp_derives_its_expansion(tmp_path)
 
     text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
     scene_file = tmp_path / "targets.toml"
-    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+    scene_file.write_text(text.replace(EXAMPLE_CRIMP,
                                        "target_crimp_pct = { warp = 1.0 }")
                           + "\n[calibrate]\ncrimp_pct = { weft = 1.0 }\n")
     with pytest.raises(InputError, match="target_crimp_pct derives the expansion itself"):
@@ -226,7 +229,7 @@ def _unreachable_auto_scene(tmp_path):
 
     text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
     scene_file = tmp_path / "targets.toml"
-    scene_file.write_text(text.replace("expansion = { warp = -0.09, weft = -0.09 }",
+    scene_file.write_text(text.replace(EXAMPLE_CRIMP,
                                        'target_crimp_pct = { weft = "auto" }\n'
                                        "auto_margin_pct = 50"))
     return scene_file

@@ -141,6 +141,34 @@ def test_presets_never_make_a_scene_costlier_or_coarser_than_meant():
     assert accurate.fabric.warp.n_fibres == 37
 
 
+def test_a_preset_rebuilds_the_yarn_law_on_its_own_fibre():
+    """The plain-weave example carries the within-family law, whose pair forces are built
+    on the virtual fibre: ``--fast`` (one fibre of the whole yarn's area) and ``--accurate``
+    (19) rebuild it there — kept at 7 fibres, LAMMPS refused the table at the first
+    command ("the warp fibres need the law's bead diameter ...")."""
+    import dataclasses
+
+    from fabmd import presets
+    from fabmd.examples_dir import example_scene
+    from fabmd.model.fabric_model import family_beads
+
+    scene = load_scene(example_scene("plain_weave.toml"))
+    assert scene.contact.within_family_law is not None
+    for name, fibres in (("fast", 1), ("accurate", 19)):
+        run = presets.apply_preset(scene, name)
+        fibre = family_beads(run.fabric, run.discretisation)["warp"].fibre
+        assert run.fabric.warp.n_fibres == fibres
+        for _, law in run.contact.within_family_laws:
+            assert law.diameter_m == pytest.approx(fibre.diameter_m, rel=1e-12)
+            assert law.area_m2 == pytest.approx(fibre.area_m2, rel=1e-12)
+        assert run.contact.within_family_law.diameter_m == pytest.approx(fibre.diameter_m)
+    # a scene whose contact was built in Python cannot be re-derived: said, not guessed
+    python_built = dataclasses.replace(scene, contact_table=None)
+    with pytest.raises(InputError, match="built in Python"):
+        python_built.with_fibres(1)
+    assert python_built.rediscretised(spacing_ratio=0.25).discretisation.spacing_ratio == 0.25
+
+
 def test_preset_speed_factor_scales_every_driven_test(monkeypatch):
     import tomllib
 

@@ -30,7 +30,7 @@ def run(args) -> int:
 
     from ..engine import mpi
     from ..examples_dir import example_scene
-    from ..pipeline import run_crimp, run_test
+    from ..pipeline import run_test
     from ..presets import apply_preset
     from ..results.folder import prepare_run_folder, write_json
     from ..results.preview import preview_png
@@ -53,8 +53,7 @@ def run(args) -> int:
         preview_png(loose, out / "loose" / "preview.png", title=f"Loose fabric: {scene.title}")
     say(f"1. loose fabric: {loose.n_beads} beads, {loose.n_fibres} virtual fibres "
         f"-> loose/preview.png")
-    crimp = run_crimp(scene, out / "crimp", engine=engine, form="cell")
-    c = crimp.summary
+    c = _crimp(scene, out, engine, args.preset, say)
     say(f"2. crimp (periodic cell, {c['crimped']['n_beads']} beads, {c['wall_s']:.1f} s): "
         f"thickness {1e3 * c['loose']['thickness_m']:.2f} -> "
         f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp (per fibre) "
@@ -67,8 +66,7 @@ def run(args) -> int:
         f"{t['initial_stiffness_n_m_per_width']:.4g} N/m per unit strain, after "
         f"{t['transition_elongation_pct']:.3g} % {t['final_stiffness_n_m_per_width']:.4g} N/m "
         f"per unit strain; "
-        f"energy balance "
-        f"{100 * t['energy_balance']['relative_error']:.2f} % -> tension/tension/curve.png")
+        f"{_balance(t)} -> tension/tension/curve.png")
     frame = run_test(scene, "picture-frame", out / "picture_frame", engine=engine,
                      crimped=out / "crimp")
     f = frame["test_summary"]
@@ -76,8 +74,7 @@ def run(args) -> int:
     lock = f"{lock:.1f} deg" if lock is not None else "none found"  # the test may stop first
     say(f"4. picture frame ({frame['coupon_beads']} beads, {f['wall_s']:.0f} s): locking angle "
         f"{lock}, max normalised force "
-        f"{f['max_normalised_force_n_m']:.4g} N/m; energy balance "
-        f"{100 * f['energy_balance']['relative_error']:.2f} % "
+        f"{f['max_normalised_force_n_m']:.4g} N/m; {_balance(f)} "
         f"-> picture_frame/picture_frame/curve.png")
     summary = {"preset": args.preset, "scene": scene.source, "crimp": c,
                "tension": t, "picture_frame": f, "wall_s": time.perf_counter() - t0}
@@ -86,6 +83,34 @@ def run(args) -> int:
         _overview(out, tension, frame)
     say(f"done in {summary['wall_s']:.0f} s -> {out / 'demo.png'}")
     return 0
+
+
+def _balance(test_summary: dict) -> str:
+    """"energy balance 0.03 %", or why it was not measured (the within-family law's
+    contact work cannot be sampled: its note says so)."""
+    error = test_summary["energy_balance"].get("relative_error")
+    return ("energy balance not measured (see summary.json)" if error is None
+            else f"energy balance {100 * error:.2f} %")
+
+
+def _crimp(scene, out: Path, engine, preset: str, say) -> dict:
+    """The crimp stage's summary. With ``--fast`` (one virtual fibre per yarn) a weaving
+    tension the search cannot reach — one-fibre yarns jump across it, 10.4 → 4.4 N at the
+    same shrink on the example (measured) — goes on from the closest run, said; a set-up
+    check, not numbers. Any other preset stops there."""
+    import json
+
+    from ..errors import CalibrationNotReached
+    from ..pipeline import run_crimp
+
+    try:
+        return run_crimp(scene, out / "crimp", engine=engine, form="cell").summary
+    except CalibrationNotReached as exc:
+        if preset != "fast":
+            raise
+        say(f"fabmd: warning: {exc}; --fast goes on from that closest run (a set-up check, "
+            f"not numbers)")
+        return json.loads((out / "crimp" / "summary.json").read_text())
 
 
 def _overview(out: Path, tension: dict, frame: dict) -> None:
