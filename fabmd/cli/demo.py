@@ -113,6 +113,15 @@ def _crimp(scene, out: Path, engine, preset: str, say) -> dict:
         return json.loads((out / "crimp" / "summary.json").read_text())
 
 
+def _shade_untrusted(ax, test_summary: dict) -> None:
+    """Shade the intervals the per-interval verdict flagged (the start-up spike and any
+    part not quasi-static), as each test's own curve.png does."""
+    flagged = (test_summary.get("quasi_static_intervals") or {}).get("flagged") or []
+    for k, (lo, hi) in enumerate(flagged):
+        ax.axvspan(lo, hi, color="tab:red", alpha=0.15, lw=0,
+                   label="not quasi-static" if k == 0 else None)
+
+
 def _overview(out: Path, tension: dict, frame: dict) -> None:
     """Both curves side by side in ``demo.png``."""
     from ..results import figure
@@ -121,6 +130,7 @@ def _overview(out: Path, tension: dict, frame: dict) -> None:
 
     plt = _pyplot()
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.4), layout="constrained")
+    _shade_untrusted(a, tension["test_summary"])
     tc = read_csv(Path(tension["results"]) / "curve.csv")
     a.plot(tc["elongation_pct"], tc["force_per_width_n_m"], lw=1.8, label="fabric")
     a.set_xlabel("elongation [%]")
@@ -129,6 +139,7 @@ def _overview(out: Path, tension: dict, frame: dict) -> None:
     x = tension["test_summary"].get("transition_elongation_pct")
     figure.finish(fig, a, marks=[{"kind": "vline", "x": x, "label": f"transition {x:.3g} %"}]
                   if x is not None and 0 < x < float(tc["elongation_pct"].max()) else None)
+    _shade_untrusted(b, frame["test_summary"])
     fc = read_csv(Path(frame["results"]) / "curve.csv")
     b.plot(fc["shear_angle_deg"], fc["normalised_force_n_m"], lw=1.8, label="F_norm")
     lock = frame["test_summary"].get("locking_angle_deg")
