@@ -185,13 +185,19 @@ class Scene:
             fabric = dataclasses.replace(fabric, **specs)
         if spacing_ratio is not None:
             disc = dataclasses.replace(disc, spacing_ratio=spacing_ratio)
-        contact = self.contact
-        if self.contact_table is not None:
-            contact = _contact(self.contact_table, fabric, disc, self.source or "scene")
+        contact, where = self.contact, self.source or "scene"
+        # the table rebuilds the contact only while the scene still has the one it gave
+        # (a contact replaced in code is kept, or refused below if it has a law)
+        from_table = (self.contact_table is not None and contact == _contact(
+            self.contact_table, self.fabric, self.discretisation, where))
+        if from_table:
+            contact = _contact(self.contact_table, fabric, disc, where)
         elif n_fibres is not None and (contact.within_family_law is not None
                                        or contact.within_family_stiffness_pa is not None):
-            raise InputError("Scene.rediscretised: this scene's contact was built in Python "
-                             "from a compaction law; build it again for the new fibre")
+            raise InputError("Scene.rediscretised: this scene's contact was not built from "
+                             "its [contact] table (built or replaced in Python) and depends "
+                             "on the fibre through a compaction law; build it again for "
+                             f"{n_fibres} fibres per yarn")
         return dataclasses.replace(self, fabric=fabric, discretisation=disc, contact=contact)
 
     def to_dict(self) -> dict:

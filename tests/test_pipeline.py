@@ -162,11 +162,14 @@ def test_a_preset_rebuilds_the_yarn_law_on_its_own_fibre():
             assert law.diameter_m == pytest.approx(fibre.diameter_m, rel=1e-12)
             assert law.area_m2 == pytest.approx(fibre.area_m2, rel=1e-12)
         assert run.contact.within_family_law.diameter_m == pytest.approx(fibre.diameter_m)
-    # a scene whose contact was built in Python cannot be re-derived: said, not guessed
+    # a contact built or replaced in Python is not re-derived from the table: said, or kept
     python_built = dataclasses.replace(scene, contact_table=None)
-    with pytest.raises(InputError, match="built in Python"):
+    with pytest.raises(InputError, match="built or replaced in Python"):
         python_built.with_fibres(1)
     assert python_built.rediscretised(spacing_ratio=0.25).discretisation.spacing_ratio == 0.25
+    replaced = dataclasses.replace(scene, contact=dataclasses.replace(
+        scene.contact, within_family_law=None, within_family_laws=(), friction=0.1))
+    assert presets.apply_preset(replaced, "fast").contact.friction == 0.1  # kept
 
 
 def test_preset_speed_factor_scales_every_driven_test(monkeypatch):
