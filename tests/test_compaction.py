@@ -66,6 +66,12 @@ def test_thickness_falls_monotonically_with_pressure(tmp_path):
     curve = read_csv(tmp_path / "c" / "curve.csv")
     assert set(curve) >= {"pressure_pa", "thickness_m", "phase"}
     assert (curve["phase"] < 0).any()  # it unloaded
+    # no law: the platen's speed is constant, down and up; the unloading ends at the lowest
+    # reported pressure (1 kPa) or back at the start
+    np.testing.assert_allclose(curve["platen_speed_m_s"], test.speed_m_s(cell), rtol=1e-9)
+    back = curve["phase"] < 0
+    assert (curve["pressure_pa"][back][-1] <= 1e3
+            or curve["thickness_m"][back][-1] >= s["starting_gap_m"] * (1 - 1e-9))
     assert (tmp_path / "c" / "curve.png").exists()
 
 

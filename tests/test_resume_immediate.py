@@ -1,6 +1,8 @@
 """A resumed input keeps the values its immediate variables got in the interrupted run
 (``variable t0 equal $(time)``): replaying ``$(time)`` at the checkpoint moved a
-compaction's platen back to its start (the time origin of its loading)."""
+compaction's platen back to its start (the time origin of its loading) — and the values its
+``internal`` variables had (a ``fix controller`` integrates the compaction platen's travel
+and the adaptive boundaries' in one), which the restart file does not hold."""
 
 import numpy as np
 import pytest
@@ -37,10 +39,14 @@ boundary p p p
 read_data one.data
 timestep 0.01
 fix nve all nve
+variable travel internal 0.0
+variable speed equal 2.0
+fix integrate all controller 1 1.0 1.0 0.0 0.0 v_speed 0.0 travel
 run 100
 variable t0 equal $(time:%.15g)
 variable since equal "time-v_t0"
-fix out all print 10 "$(step) ${since}" file since.dat screen no title "# step since_s"
+fix out all print 10 "$(step) ${since} $(v_travel:%.15g)" file since.dat screen no &
+    title "# step since_s travel_m"
 run 200
 """
 
@@ -53,6 +59,12 @@ def test_immediate_variables_are_replayed_with_their_frozen_values():
     out = resume_commands(commands, state)
     assert out[1].split() == ["variable", "t0", "equal", "1.25"]
     assert out[0] == commands[0] and out[2] == commands[2]
+    # an internal variable (a fix changes it) is replayed with its value at the checkpoint
+    with_internal = ["variable x internal 0.0"] + commands
+    assert immediate_variables(with_internal) == ["x", "t0"]
+    state = CheckpointState("in.x", 4, 0, 10, 5, 5, frozen_variables={"x": -0.5, "t0": 1.25})
+    assert resume_commands(with_internal, state)[0].split() == ["variable", "x", "internal",
+                                                                "-0.5"]
     # an old checkpoint (no frozen values) replays the command as written
     state.frozen_variables = None
     assert resume_commands(commands, state)[1] == commands[1]
@@ -87,3 +99,6 @@ def test_resumed_run_keeps_the_time_origin(tmp_path):
     np.testing.assert_array_equal(cut["step"], whole["step"])
     np.testing.assert_allclose(cut["since_s"], whole["since_s"], rtol=0, atol=1e-12)
     assert whole["since_s"][-1] == pytest.approx(2.0)
+    # the integrated travel goes on from where it was (-dt * speed each step: -6 m by 300)
+    np.testing.assert_allclose(cut["travel_m"], whole["travel_m"], rtol=0, atol=1e-12)
+    assert whole["travel_m"][-1] == pytest.approx(-6.0)

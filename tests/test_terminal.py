@@ -54,6 +54,16 @@ def test_stage_header_counts_beads_and_steps(tmp_path):
     assert text.startswith(f"crimp: {model.n_beads:,} beads, up to 1,500 steps")
     seconds = SECONDS_PER_BEAD_STEP * model.n_beads * 1500 / 2
     assert f"{seconds:.2g} s on 2 ranks" in text
+    assert "sooner" not in text
+    # a run that ends at its target (a halt the input goes on after) says it may be shorter;
+    # a guard's hard stop does not count
+    (tmp_path / "in.y").write_text("read_data model.data\n"
+                                   "fix g all halt 10 v_nan > 0.5 error hard\nrun 1000\n")
+    assert "sooner" not in stage_header(tmp_path, "in.y", "x")
+    (tmp_path / "in.z").write_text("read_data model.data\nfix r all halt 10 v_p >= 2e5 "
+                                   "error continue message yes\nrun 1000\n")
+    assert stage_header(tmp_path, "in.z", "compaction").endswith(
+        "(a run stops at its target: usually sooner)")
 
 
 def test_test_command_summary_states_stages_and_the_beads_that_ran():

@@ -22,7 +22,9 @@ puts the two together when it ends, so every frame is there once; the interrupte
 ``run`` continues with the same ``start``/``stop`` so ramps pick up exactly where
 they were. A variable defined with an immediate value (``variable t equal $(time)``) is
 replayed with the value it got in the interrupted run (``frozen_variables``), not what
-``$(...)`` gives at the checkpoint.
+``$(...)`` gives at the checkpoint; so is an ``internal`` variable (a ``fix controller``
+integrates one step by step: the adaptive boundary's or the compaction platen's travel,
+its pace), which the restart file does not hold.
 """
 
 from __future__ import annotations
@@ -48,6 +50,8 @@ STATE_COMMANDS = {
 _FILE_KEYWORD = re.compile(r"\b(file)\s+(\S+)")
 #: ``variable NAME equal ...$(...)...``: a value fixed when the command ran
 _IMMEDIATE_VARIABLE = re.compile(r"^variable\s+(\S+)\s+equal\s+.*\$\(")
+#: ``variable NAME internal VALUE``: a value a fix may change as the run goes
+_INTERNAL_VARIABLE = re.compile(r"^variable\s+(\S+)\s+internal\s")
 #: dump styles whose files :func:`fabmd.engine.lammps_dump.truncate_dump` can cut back
 _CUT_DUMP_STYLES = ("custom", "atom", "local")
 #: what a dump file written before the checkpoint is called while the resumed run writes
@@ -121,8 +125,10 @@ def open_dumps(commands: list[str]) -> dict[str, str]:
 
 def immediate_variables(commands: list[str]) -> list[str]:
     """Names of the equal-style variables ``commands`` define with an immediate ``$(...)``
-    value (fixed when the command ran: a replay at another time would change them)."""
-    return [m.group(1) for m in map(_IMMEDIATE_VARIABLE.match, commands) if m]
+    value (fixed when the command ran: a replay at another time would change them), and of
+    their ``internal`` variables (a fix changes them as the run goes)."""
+    return [m.group(1) for c in commands
+            for m in (_IMMEDIATE_VARIABLE.match(c) or _INTERNAL_VARIABLE.match(c),) if m]
 
 
 def resume_commands(commands: list[str], state: CheckpointState) -> list[str]:
@@ -135,9 +141,13 @@ def resume_commands(commands: list[str], state: CheckpointState) -> list[str]:
     for command in commands[: state.command_index]:
         name = command.split()[0]
         immediate = _IMMEDIATE_VARIABLE.match(command)
+        internal = _INTERNAL_VARIABLE.match(command)
         if immediate and immediate.group(1) in frozen:
             out.append(f"variable        {immediate.group(1)} equal "
                        f"{frozen[immediate.group(1)]!r}")
+        elif internal and internal.group(1) in frozen:
+            out.append(f"variable        {internal.group(1)} internal "
+                       f"{frozen[internal.group(1)]!r}")
         elif name == "read_data":
             out.append(f"read_restart    {RESTART}")
         elif name in STATE_COMMANDS or plain_run_steps(command) is not None:

@@ -68,8 +68,11 @@ def stage_header(run_dir: Path, input_name: str, label: str, ranks: int = 1) -> 
     if beads is None:
         return f"{label}: up to {steps:,} steps"
     cost = SECONDS_PER_BEAD_STEP * beads * steps / max(1, ranks)
-    early = any(c.split()[:1] == ["fix"] and " halt " in f" {c} " and "quasi_static" in c
-                for c in commands)
+    # a halt that lets the input go on ends a run at its target (guards stop hard)
+    halts = [c for c in commands if c.split()[:1] == ["fix"] and " halt " in f" {c} "
+             and "error continue" in c]
+    early = (" (a relaxation stops once quasi-static: usually sooner)"
+             if any("quasi_static" in c for c in halts) else
+             " (a run stops at its target: usually sooner)" if halts else "")
     return (f"{label}: {beads:,} beads, up to {steps:,} steps; rough cost up to "
-            f"{_clock(cost)} on {ranks} rank{'s' if ranks > 1 else ''}"
-            + (" (a relaxation stops once quasi-static: usually sooner)" if early else ""))
+            f"{_clock(cost)} on {ranks} rank{'s' if ranks > 1 else ''}" + early)

@@ -5,9 +5,12 @@ calibrating its transverse behaviour): the as-woven fabric — a cell periodic i
 and y, so no edges — first settles free with its centre of mass held (a platen it
 touched while still moving would kick it into the other one: Cundall damping does not
 damp a drift); then it lies on a fixed bottom platen at its lowest bead surface, and
-the top platen, from its highest, comes down at
-a constant speed until the mean pressure over an output interval reaches
-``max_pressure_pa``, then goes back up as far as it came. The speed is set by the fabric's
+the top platen, from its highest, comes down — faster as the pressure rises
+(``speed_schedule``) — until the mean pressure over an output interval reaches
+``max_pressure_pa``, then goes back up the same way until the pressure is down to the
+lowest reported one (below it the pace is at its slowest: on the plain-weave example the
+last kilopascal took 0.8 M steps, the 199 before it 1.04 M) or it is back where it
+started. The base speed is set by the fabric's
 through-thickness wave speed so that the reported thicknesses are measured with the load
 through the fabric (:mod:`fabmd.protocols.compaction_speed`); ``speed_fraction`` overrides
 it with a fraction of the fibres' axial wave speed. Both platens are
@@ -18,7 +21,8 @@ it with a fraction of the fibres' axial wave speed. Both platens are
 * thickness h = distance between the platens [m] (a bead touches a platen at its
   surface, so h is the fabric's thickness including the bead radii), interval mean;
 * ``curve.csv``: ``pressure_pa``, ``thickness_m``, ``phase`` (1 loading, −1 unloading),
-  the bottom platen's pressure (equal to the top's when quasi-static), kinetic energy;
+  the bottom platen's pressure (equal to the top's when quasi-static), kinetic energy, the
+  platen's speed;
 * ``summary.json``: thickness at 1, 10 and 100 kPa (loading branch, first
   crossing) and at ``datasheet_pressure_pa`` when given, and whether the loading
   thickness fell monotonically with pressure.
@@ -99,6 +103,12 @@ class Compaction:
             platen mismatch at the lowest reported pressure is ``mismatch_target``
             (:mod:`~fabmd.protocols.compaction_speed`; without a yarn compaction law in the
             contact: 5e-6 of the axial wave speed).
+        speed_schedule: ``"pressure"`` (default): the platen goes faster as the pressure
+            rises, v0·φ(p), which holds the predicted mismatch at its value at the lowest
+            reported pressure (:func:`~fabmd.protocols.compaction_speed.pace_factor`; the
+            speed above is then v0, its speed below that pressure); needs a yarn compaction
+            law in the contact (without one the speed stays constant, and the summary says
+            so). ``"constant"``: v0 throughout.
         mismatch_target: the predicted top/bottom platen mismatch at the lowest reported
             pressure that sets the default speed, (0, 0.1] (0.1: the verdict's limit; the
             measured mismatch was 0.25 of the prediction where the law acts through the
@@ -126,6 +136,7 @@ class Compaction:
     max_pressure_pa: float = 2e5
     datasheet_pressure_pa: float | None = None
     speed_fraction: float | None = None
+    speed_schedule: str = "pressure"
     mismatch_target: float = 0.1
     step_limit: int = 50_000_000
     reruns: int = 2
@@ -152,6 +163,8 @@ class Compaction:
         if self.speed_fraction is not None:
             inputs.in_range("compaction.speed_fraction", self.speed_fraction, 0, 0.01,
                             low_open=True)
+        inputs.one_of("compaction.speed_schedule", self.speed_schedule,
+                      ("pressure", "constant"))
         inputs.in_range("compaction.mismatch_target", self.mismatch_target, 0, 0.1,
                         low_open=True)
         inputs.positive_int("compaction.step_limit", self.step_limit, minimum=1000)
@@ -224,20 +237,40 @@ class Compaction:
         speed and settling steps: derived once per model, kept in ``plan.json``."""
         return cached_plan(self, model, self.derive_plan)
 
+    def schedule(self) -> dict:
+        """How the platen speed follows the pressure (JSON-able): ``speed_schedule``
+        as run, and for ``"pressure"`` the schedule's p0 (``pace_base_pressure_pa``), the
+        law's T (``pace_law_pa``) and the largest pace (``pace_max``)
+        (:func:`~fabmd.protocols.compaction_speed.pace_factor`)."""
+        law = compaction_speed.law_stiffness_pa(self.contact)
+        if self.speed_schedule == "constant":
+            return {"speed_schedule": "constant"}
+        if law is None:
+            return {"speed_schedule": "constant",
+                    "schedule_note": "no yarn compaction law in the contact: the platen "
+                                     "speed stays constant"}
+        return {"speed_schedule": "pressure",
+                "pace_base_pressure_pa": self.lowest_report_pressure_pa(),
+                "pace_law_pa": law[1], "pace_max": compaction_speed.MAX_PACE}
+
     def derive_plan(self, model: BeadModel) -> RunPlan:
         dt = stable_time_step_s(model, [self.contact, self.tool], self.time_step)
         lo, hi = self.platens(model)
         travel = self.max_travel_fraction * (hi - lo)
         how = self.speed(model)
         speed = how["platen_speed_m_s"]
+        # at most: the whole travel at the base speed (the run ends at the pressure)
         steps = math.ceil(travel / speed / dt)
-        every = max(1, steps // self.samples)
+        schedule = self.schedule()
+        estimate = compaction_speed.estimated_steps(
+            self.contact, hi - lo, travel, self.max_pressure_pa, speed, dt, self.unload,
+            schedule.get("pace_base_pressure_pa"))
+        # about ``samples`` intervals over the loading the law expects
+        every = max(1, min(steps, estimate["loading_steps"]) // self.samples)
         # the settle is the fabric's own time, not the platen's: as long as at the axial
         # fallback speed, whatever the platen speed
         reference = compaction_speed.FALLBACK_SPEED_FRACTION * how["axial_wave_speed_m_s"]
-        settle = every * max(1, round(self.settle_fraction * self.samples * speed / reference))
-        estimate = compaction_speed.estimated_steps(
-            self.contact, hi - lo, travel, self.max_pressure_pa, speed, dt, self.unload)
+        settle = every * max(1, round(self.settle_fraction * travel / reference / dt / every))
         compaction_speed.check_steps(estimate["estimated_steps"] + settle, self.step_limit,
                                      how)
         return RunPlan(time_step_s=dt, steps=steps, every=every, duration_s=travel / speed,
@@ -245,7 +278,8 @@ class Compaction:
                                                "estimated_steps": estimate["estimated_steps"]
                                                + settle,
                                                "estimated_travel_m":
-                                                   estimate["estimated_travel_m"], **how})
+                                                   estimate["estimated_travel_m"],
+                                               **schedule, **how})
 
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
@@ -258,6 +292,10 @@ class Compaction:
         lo, hi = self.platens(model)
         every = self.every(model)
         steps = self.max_steps(model)
+        plan = self.plan(model)
+        pace = ("0.0" if plan.extra["speed_schedule"] == "constant" else
+                compaction_speed.pace_formula("v_pace_p", plan.extra["pace_base_pressure_pa"],
+                                              plan.extra["pace_law_pa"]))
         text = render(
             "compaction", z_bottom=lo, z_top=hi, speed=self.speed_m_s(model),
             max_pressure=self.max_pressure_pa, local_damping=self.local_damping,
@@ -267,13 +305,16 @@ class Compaction:
             overlap_monitor=blocks.overlap_monitor(model, self.contact, beads, every=every,
                                                    tool_fixes=("bottom", "top")),
             guards=blocks.guards(model, dt), max_steps=steps,
-            settle_steps=self.settle_steps(model),
+            settle_steps=self.settle_steps(model), pace=pace,
+            # the pace is set once per output interval and followed over two
+            hold_alpha=1.0 / (every * dt), lag_alpha=1.0 / (2 * every * dt),
             # without unloading the run ends at the pressure, so both platens must carry
             # it (a platen striking one bead first reads it alone, for an interval)
             halt_pressure="f_means[1]" if self.unload else
             '"ternary(f_means[1]<f_means[2],f_means[1],f_means[2])"')
         if self.unload:
-            text += render("compaction_unload", speed=self.speed_m_s(model),
+            text += render("compaction_unload", every=every, max_steps=steps,
+                           unload_end=self.lowest_report_pressure_pa(),
                            settle_steps=self.settle_steps(model))
         else:
             text += render("compaction_stop", settle_steps=self.settle_steps(model))
@@ -431,11 +472,15 @@ def _curve(means: dict, settle_steps: int, time_step_s: float) -> dict:
     """The run's curve columns after the free settle (those intervals are not part of it);
     phase +1 loading (an interval straddling the turn is counted with it), −1 unloading."""
     keep = means["step"] > settle_steps
-    return {"time_s": (means["step"][keep] - settle_steps) * time_step_s,
-            "pressure_pa": means["pressure_pa"][keep], "thickness_m": means["thickness_m"][keep],
-            "phase": np.where(means["phase"][keep] > 0, 1, -1),
-            "bottom_pressure_pa": means["bottom_pressure_pa"][keep],
-            "kinetic_energy_j": means["kinetic_j"][keep]}
+    curve = {"time_s": (means["step"][keep] - settle_steps) * time_step_s,
+             "pressure_pa": means["pressure_pa"][keep],
+             "thickness_m": means["thickness_m"][keep],
+             "phase": np.where(means["phase"][keep] > 0, 1, -1),
+             "bottom_pressure_pa": means["bottom_pressure_pa"][keep],
+             "kinetic_energy_j": means["kinetic_j"][keep]}
+    if "speed_m_s" in means:  # the platen's speed, interval mean (folders since the pace)
+        curve["platen_speed_m_s"] = means["speed_m_s"][keep]
+    return curve
 
 
 MONOTONE_NOTE = ("loading branch from where both platens carry the load (within a factor 2) "
