@@ -9,7 +9,7 @@ from fabmd.engine import Engine
 from fabmd.errors import InputError
 from fabmd.model.beads import model_bead_parameters
 from fabmd.model.contact import ContactModel, ToolContact
-from fabmd.protocols.compaction import Compaction, thickness_at
+from fabmd.protocols.compaction import Compaction, monotone_loading, thickness_at
 from fabmd.results.folder import read_csv
 from fabmd.scene.plan import RunPlan
 
@@ -24,6 +24,22 @@ def test_thickness_at_interpolates_the_first_crossing():
     assert thickness_at(p[2:], h[2:], (1e3,))["1000"] is None  # starts above 1 kPa
     assert got["10000"] == pytest.approx(1.6 - 0.6 * (1e4 - 1500) / 18500)
     assert got["1e+06"] is None
+
+
+def test_a_fabric_that_gives_way_is_not_monotone():
+    """Judged in the order of travel from half the lowest reported pressure: the 7-fibre
+    plain weave's flattening (26.6 → 24.1 kPa as it thins) fails; noise under 1 % and a
+    rattle below the floor do not."""
+    rising = np.geomspace(100.0, 2e5, 5000)  # 0.15 % a sample
+    assert monotone_loading(rising, 500.0)
+    gives_way = np.concatenate([np.linspace(1e3, 26.6e3, 50), np.linspace(26.6e3, 24.1e3, 20),
+                                np.linspace(24.1e3, 2e5, 50)])
+    assert not monotone_loading(gives_way, 500.0)
+    noisy = rising * (1 + 0.004 * np.sin(np.arange(rising.size)))
+    assert np.diff(noisy).min() < 0 and monotone_loading(noisy, 500.0)
+    rattle = np.concatenate([[70.0, 100.0, 59.0, 200.0], rising[rising > 300]])
+    assert monotone_loading(rattle, 500.0) and not monotone_loading(rattle, 50.0)
+    assert monotone_loading(np.array([10.0, 20.0]), 500.0)  # never reached: nothing to judge
 
 
 def test_bad_settings_fail_before_lammps():
