@@ -357,3 +357,24 @@ def test_yarn_sections_read_the_width_of_affinely_sheared_yarns_as_w_cos_gamma()
     # an interior that cuts the second yarn's fibres leaves it out
     data["free_side_m"] = 2 * (6.25e-3 - 5e-3) / bench.CENTRAL + 1e-9
     assert bench.whole_yarns(data, bench.interior(data)) != [1, 2]
+
+
+def test_crimp_sections_read_a_single_fibre_yarn_as_one_diameter_across_the_boundary():
+    """``benchmarks/crimp_sections.py`` on single-fibre yarns: every section is one bead
+    diameter wide and high, also where a yarn's beads sit a cell length apart (the
+    periodic image: unwrapped), and the span is the beads' z extent plus a diameter."""
+    from .fabrics import plain_weave_cell
+
+    bench = load_benchmark("crimp_sections")
+    cell = plain_weave_cell()
+    d = float(cell.diameters.mean())
+    s = bench.sections(cell)
+    assert s["width_m"] == pytest.approx(d) and s["height_m"] == pytest.approx(d)
+    z = cell.positions[:, 2]
+    assert s["span_m"] == pytest.approx(np.ptp(z) + d)
+    assert s["fibres_per_yarn"] == 1
+    # half of the first warp yarn's beads moved by one cell length across it (y)
+    first = np.nonzero(cell.yarn_ids == 1)[0][::2]
+    assert cell.yarns[0].family == "warp"
+    cell.positions[first, 1] += (cell.box_hi - cell.box_lo)[1]
+    assert bench.sections(cell)["width_m"] == pytest.approx(d)
