@@ -242,9 +242,9 @@ class Compaction:
         as run, and for ``"pressure"`` the schedule's p0 (``pace_base_pressure_pa``), the
         law's T (``pace_law_pa``) and the largest pace (``pace_max``)
         (:func:`~fabmd.protocols.compaction_speed.pace_factor`)."""
-        law = compaction_speed.law_stiffness_pa(self.contact)
         if self.speed_schedule == "constant":
             return {"speed_schedule": "constant"}
+        law = compaction_speed.law_stiffness_pa(self.contact)
         if law is None:
             return {"speed_schedule": "constant",
                     "schedule_note": "no yarn compaction law in the contact: the platen "
@@ -288,16 +288,15 @@ class Compaction:
                              "platens close on it), got periodic = "
                              f"{tuple(model.periodic)}")
         beads = model_bead_parameters(model)
-        dt = self.time_step_s(model)
-        lo, hi = self.platens(model)
-        every = self.every(model)
-        steps = self.max_steps(model)
         plan = self.plan(model)
+        dt, every, steps = plan.time_step_s, plan.every, plan.steps
+        settle = plan.extra["settle_steps"]
+        lo, hi = self.platens(model)
         pace = ("0.0" if plan.extra["speed_schedule"] == "constant" else
                 compaction_speed.pace_formula("v_pace_p", plan.extra["pace_base_pressure_pa"],
                                               plan.extra["pace_law_pa"]))
         text = render(
-            "compaction", z_bottom=lo, z_top=hi, speed=self.speed_m_s(model),
+            "compaction", z_bottom=lo, z_top=hi, speed=plan.speed_m_s,
             max_pressure=self.max_pressure_pa, local_damping=self.local_damping,
             bottom_contact=blocks.tool_region(self.tool, beads, "bottom", fix_id="bottom"),
             top_contact=blocks.tool_region(self.tool, beads, "top", fix_id="top"),
@@ -305,7 +304,7 @@ class Compaction:
             overlap_monitor=blocks.overlap_monitor(model, self.contact, beads, every=every,
                                                    tool_fixes=("bottom", "top")),
             guards=blocks.guards(model, dt), max_steps=steps,
-            settle_steps=self.settle_steps(model), pace=pace,
+            settle_steps=settle, pace=pace,
             # the pace is set once per output interval and followed over two
             hold_alpha=1.0 / (every * dt), lag_alpha=1.0 / (2 * every * dt),
             # without unloading the run ends at the pressure, so both platens must carry
@@ -315,9 +314,9 @@ class Compaction:
         if self.unload:
             text += render("compaction_unload", every=every, max_steps=steps,
                            unload_end=self.lowest_report_pressure_pa(),
-                           settle_steps=self.settle_steps(model))
+                           settle_steps=settle)
         else:
-            text += render("compaction_stop", settle_steps=self.settle_steps(model))
+            text += render("compaction_stop", settle_steps=settle)
         return "\n".join([
             blocks.setup(model, self.protocol, DATA_FILE, dt), blocks.bonds(model),
             blocks.contact(model, self.contact, beads), text,
@@ -513,6 +512,8 @@ def monotone_loading(pressure_pa: np.ndarray, floor_pa: float,
     p = p[start[0]:]
     highest = np.maximum.accumulate(p)
     return bool(((highest - p) <= tolerance * highest).all())
+
+
 QUASI_STATIC_NOTE = ("kinetic energy over the platen work done since the loading began, and "
                      "|bottom − top| / top pressure, on the loading branch from first contact "
                      "(both platens carry the load) above 10 % of the peak; None: not measured "
