@@ -108,8 +108,34 @@ def summarise(model, scene) -> dict:
         "crimp": info["crimp"],
         "datasheet": info.get("datasheet"),
         "yarn_packing": info.get("yarn_packing"),
+        "within_family_law": law_realisation(scene.contact, fams),
         "critical_time_step_s": dt,
     }
+
+
+def law_realisation(contact, families) -> dict | None:
+    """Per family, where the within-family law's virtual fibres touch and the pressure the
+    law loses below that state (:meth:`~fabmd.model.bundle_contact.BundleContact.
+    realisation`); None without the law."""
+    if contact.within_family_law is None:
+        return None
+    return {f: contact.family_law(f).realisation() for f in families}
+
+
+def law_line(s: dict) -> str:
+    """One line on how the within-family law is realised ('' without the law)."""
+    laws = s.get("within_family_law")
+    if not laws:
+        return ""
+    texts = {}  # families that read the same share one text
+    for f, r in laws.items():
+        text = f"touch at Vf {r['touching_vf']:.2f}"
+        if r["cut_pressure_pa"] > 0:
+            text += (f" (the law's Vf0 {r['law_vf0']:.2f}: its first "
+                     f"{1e-3 * r['cut_pressure_pa']:.3g} kPa cut off)")
+        texts.setdefault(text, []).append(f)
+    return "\n  within-family law: " + "; ".join(
+        f"{', '.join(fams)} fibres {text}" for text, fams in texts.items())
 
 
 def datasheet_lines(s: dict) -> str:
@@ -133,7 +159,7 @@ def datasheet_lines(s: dict) -> str:
             + (f", woven width {1e3 * p['woven_width_m']:.3g} mm"
                if abs(p["woven_width_m"] - p["width_m"]) > 1e-12 else "") + ")"
             for f, p in pack.items())
-    return line
+    return line + law_line(s)
 
 
 def run(args) -> int:

@@ -135,6 +135,14 @@ class BundleContact:
         """The law's pressure where the virtual fibres touch, p(Vf_touch) [Pa] (the shift)."""
         return self.law.pressure_pa(self.touching_vf)
 
+    def realisation(self) -> dict:
+        """How the bead bundle realises the law: where its virtual fibres touch (Vf), the
+        law's own start Vf0, and the pressure cut off below the touching state [Pa] (0
+        when they touch at or below Vf0: the law acts as stated from Vf0). The contact
+        diameter, and so the cut, comes from how the yarn's section packs its fibres."""
+        return {"touching_vf": self.touching_vf, "law_vf0": self.law.vf0,
+                "cut_pressure_pa": self.touching_pressure_pa}
+
     @property
     def packing_spacing_m(self) -> float:
         """Axis spacing at which the bundle reaches the packing limit [m]."""
