@@ -85,6 +85,8 @@ def test_bad_frames_are_refused():
         PictureFrame(max_shear_angle_deg=85)
     with pytest.raises(InputError, match="pretension_strain"):
         PictureFrame(pretension_strain=0.2)
+    with pytest.raises(InputError, match="pretension_strain"):
+        PictureFrame(pretension_strain=-0.05)
     with pytest.raises(InputError, match="square coupon"):
         PictureFrame().prepare(parallel_fibres())
     square = plain_weave_cell(spacing_m=1e-3, cells=(2, 2), periodic=False)
@@ -249,3 +251,18 @@ def test_preload_shrinks_only_the_unclamped_fibres():
     r0 = prepared.bond_type_table[new_types[0] - 1].rest_length_m
     assert f"{r0 * 0.99:.10g}" in text  # the shorter rest length is kept for the test
     assert "no clamping preload" in PictureFrame().input_text(square)
+
+
+def test_mounting_slack_lengthens_only_the_unclamped_fibres():
+    """A negative pretension_strain mounts the fabric slack: the free fibres' rest length
+    grows by its size (ramped with the clamps held) and stays longer for the test."""
+    square = plain_weave_cell(spacing_m=1e-3, cells=(3, 3), periodic=False)
+    frame = PictureFrame(pretension_strain=-0.01)
+    prepared = frame.prepare(square)
+    new_types = frame.preload_types(prepared)
+    assert len(new_types) == 2
+    text = frame.input_text(prepared)
+    assert "mounting slack: the rest length of the bonds of the unclamped fibres grows" in text
+    r0 = prepared.bond_type_table[new_types[0] - 1].rest_length_m
+    assert f"{r0 * 1.01:.10g}" in text  # the longer rest length is kept for the test
+    assert f"{r0:.10g}*(1+0.01*ramp(0,1))" in text  # ramped up from the cut length

@@ -25,7 +25,11 @@ does not depend on where the test stops.
 
 ``pretension_strain`` is a clamping preload: the rest length of the bonds of the
 unclamped fibres shrinks by that strain (ramped, clamps held) before the free
-relaxation, and stays shorter for the test.
+relaxation, and stays shorter for the test. A negative one is mounting slack: the rest
+length grows by its size, as for a fabric mounted slack in the frame (the frame's force
+past 20° is mostly the clamped fibres' stretch as the fabric thickens, so a few tenths of
+a per cent move it several-fold: benchmarks/RESULTS.md "What sets the picture-frame force
+past 20°").
 """
 
 from __future__ import annotations
@@ -165,7 +169,8 @@ class PictureFrame(ClampedTest):
             free square (the area that shears). Overrides ``clamp_width_m``; None
             (default): the strip of ``clamp_width_m``.
         pretension_strain: clamping preload: rest-length shrink of the unclamped fibres,
-            in [0, 0.05).
+            in (-0.05, 0.05); negative: mounting slack, their rest length grows by its
+            size.
         pretension_transits: duration of the preload ramp in axial wave transits of the
             longest fibre.
         report_angles_deg: shear angles at which forces are reported.
@@ -203,8 +208,8 @@ class PictureFrame(ClampedTest):
         self.check_positive_or_none("max_displacement_m", "frame_length_m", "clamp_width_m")
         if self.clamp_yarns is not None:
             inputs.positive_int("picture_frame.clamp_yarns", self.clamp_yarns)
-        inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, 0, 0.05,
-                        high_open=True)
+        inputs.in_range("picture_frame.pretension_strain", self.pretension_strain, -0.05, 0.05,
+                        low_open=True, high_open=True)
         inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
@@ -322,13 +327,17 @@ class PictureFrame(ClampedTest):
         if not types or self.pretension_strain == 0:
             return "# no clamping preload"
         s = self.pretension_strain
+        slack = s < 0  # mounting slack: the rest length grows
         beads = model_bead_parameters(model)
         longest = int(np.bincount(model.fibre_ids).max())
         transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
         steps = max(1000, int(self.pretension_transits * transit / self.time_step_s(model)))
-        return render("pretension", strain=s, held="clamps", free="free",
-                      ramp=blocks.bond_ramp(model, "pretension", dict.fromkeys(types, s),
-                                            shrink=True),
+        return render("pretension", strain=abs(s), held="clamps", free="free",
+                      what="mounting slack" if slack else "clamping preload",
+                      change="grows" if slack else "shrinks",
+                      kept="longer" if slack else "shorter",
+                      ramp=blocks.bond_ramp(model, "pretension", dict.fromkeys(types, abs(s)),
+                                            shrink=not slack),
                       steps=steps, ramp_end=blocks.bond_ramp_end(
                           model, "pretension", dict.fromkeys(types, 1 - s), types,
                           note=", preloaded"))
