@@ -340,7 +340,7 @@ class PictureFrame(ClampedTest):
                                             shrink=not slack),
                       steps=steps, ramp_end=blocks.bond_ramp_end(
                           model, "pretension", dict.fromkeys(types, 1 - s), types,
-                          note=", preloaded"))
+                          note=", slack" if slack else ", preloaded"))
 
     # -- input ------------------------------------------------------------------------
     def input_text(self, model: BeadModel) -> str:
