@@ -378,3 +378,38 @@ def test_crimp_sections_read_a_single_fibre_yarn_as_one_diameter_across_the_boun
     assert cell.yarns[0].family == "warp"
     cell.positions[first, 1] += (cell.box_hi - cell.box_lo)[1]
     assert bench.sections(cell)["width_m"] == pytest.approx(d)
+
+
+def test_periodic_sections_read_affine_yarns_as_w_cos_gamma_across_images():
+    """``benchmarks/periodic_sections.py`` on a synthetic sheared cell: two warp yarns of 5
+    straight fibres along x, sheared affinely with the box (b = (ly0·sin γ, ly0·cos γ)),
+    read w·cos γ wide, also where one fibre sits a periodic image away (i·a + j·b); a yarn
+    that kept its width reads w (the ratio the script prints is then 1/cos γ)."""
+    bench = load_benchmark("periodic_sections")
+    lx, ly0, w, n = 5e-3, 5e-3, 1.2e-3, 41
+    x = np.linspace(0.0, lx, n, endpoint=False)
+    fibre, yarn_of_fibre, y0s, z = [], [], [], []
+    for yarn, yc in enumerate((1.25e-3, 3.75e-3)):
+        for k, dy in enumerate(np.linspace(-w / 2, w / 2, 5)):
+            y0s.append(yc + dy)
+            z.append(0.1e-3 * (k % 2))
+            fibre += [len(yarn_of_fibre) + 1] * n
+            yarn_of_fibre.append(yarn + 1)
+    fibre, yarn_of_fibre = np.array(fibre), np.array(yarn_of_fibre)
+    for gamma in (0.0, 25.0):
+        g = np.radians(gamma)
+        ly, xy = ly0 * np.cos(g), ly0 * np.sin(g)
+        affine, kept = [], []
+        for y0, zz in zip(y0s, z, strict=True):
+            affine.append(np.column_stack([x + y0 * np.sin(g), np.full(n, y0 * np.cos(g)),
+                                           np.full(n, zz)]))
+            yc = 1.25e-3 if y0 < 2.5e-3 else 3.75e-3
+            kept.append(np.column_stack([x, np.full(n, yc * np.cos(g) + (y0 - yc)),
+                                         np.full(n, zz)]))
+        pos = np.vstack(affine)
+        pos[fibre == 3, :2] += np.array([lx, 0.0]) - np.array([xy, ly])  # an image away
+        width, height = bench.cell_sections(pos, lx, ly, xy, fibre, yarn_of_fibre)
+        assert width == pytest.approx(w * np.cos(g), rel=1e-6)
+        assert height == pytest.approx(0.1e-3, rel=1e-6)
+        width, _ = bench.cell_sections(np.vstack(kept), lx, ly, xy, fibre, yarn_of_fibre)
+        assert width == pytest.approx(w, rel=1e-6)
