@@ -20,10 +20,9 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from yarn_sections import station_spreads  # the stations along a yarn (0.25 mm)
 
 from fabmd.analysis.trajectory_file import open_trajectory, read_lengths
-
-STATION_M = 0.25e-3  # length of a station along a yarn
 
 
 def run_folder(path: Path) -> Path:
@@ -51,17 +50,9 @@ def cell_sections(pos: np.ndarray, lx: float, ly: float, xy: float, fibre: np.nd
             j = np.round(d[1] / ly)
             i = np.round((d[0] - j * xy) / lx)
             q[m, :2] -= i * a + j * b
-        chords = [q[fib == f][-1, :2] - q[fib == f][0, :2] for f in fibres]
-        chords = [c if c @ chords[0] >= 0 else -c for c in chords]
-        axis = np.sum(chords, axis=0)
-        axis /= np.linalg.norm(axis)
-        c = q[:, :2] - q[:, :2].mean(axis=0)
-        along, across = c @ axis, c @ np.array([-axis[1], axis[0]])
-        for start in np.arange(along.min(), along.max(), STATION_M):
-            m = (along >= start) & (along < start + STATION_M)
-            if len(np.unique(fib[m])) == len(fibres):
-                widths.append(np.ptp(across[m]))
-                heights.append(np.ptp(q[m, 2]))
+        w, h = station_spreads(q, fib)
+        widths += w
+        heights += h
     return float(np.mean(widths)), float(np.mean(heights))
 
 
@@ -89,11 +80,9 @@ def table(run: Path) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", type=Path)
-    args = p.parse_args(argv)
-    for run in args.runs:
-        print(table(run) + "\n")
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("runs", nargs="+", type=Path, help="periodic-shear folders")
+    print("\n\n".join(table(run) for run in parser.parse_args(argv).runs))
     return 0
 
 

@@ -89,22 +89,32 @@ def sections(pos: np.ndarray, data: dict, inside: np.ndarray,
     yarn_of_bead = data["fibre_yarn"][data["fibre"] - 1]
     for yarn in yarns:
         sel = (yarn_of_bead == yarn) & inside
-        q, fib = pos[sel], data["fibre"][sel]
-        n_fibres = len(np.unique(fib))
-        # the yarn's direction: its fibres' end-to-end chords (the cloud's principal axis
-        # tilts once the interior is a parallelogram)
-        chords = [q[fib == f][-1, :2] - q[fib == f][0, :2] for f in np.unique(fib)]
-        chords = [c if c @ chords[0] >= 0 else -c for c in chords]
-        axis = np.sum(chords, axis=0)
-        axis /= np.linalg.norm(axis)
-        c = q[:, :2] - q[:, :2].mean(axis=0)
-        along, across = c @ axis, c @ np.array([-axis[1], axis[0]])
-        for start in np.arange(along.min(), along.max(), STATION_M):
-            m = (along >= start) & (along < start + STATION_M)
-            if len(np.unique(fib[m])) == n_fibres:
-                widths.append(np.ptp(across[m]))
-                heights.append(np.ptp(q[m, 2]))
+        w, h = station_spreads(pos[sel], data["fibre"][sel])
+        widths += w
+        heights += h
     return float(np.mean(widths)), float(np.mean(heights))
+
+
+def station_spreads(q: np.ndarray, fib: np.ndarray) -> tuple[list, list]:
+    """One yarn's width and height [m] at each station along it: the spread of its fibre
+    centres ``q`` (fibre of each: ``fib``) across it in the plane and through the
+    thickness, where a station holds every fibre (also used by periodic_sections.py)."""
+    n_fibres = len(np.unique(fib))
+    # the yarn's direction: its fibres' end-to-end chords (the cloud's principal axis
+    # tilts once the interior is a parallelogram)
+    chords = [q[fib == f][-1, :2] - q[fib == f][0, :2] for f in np.unique(fib)]
+    chords = [c if c @ chords[0] >= 0 else -c for c in chords]
+    axis = np.sum(chords, axis=0)
+    axis /= np.linalg.norm(axis)
+    c = q[:, :2] - q[:, :2].mean(axis=0)
+    along, across = c @ axis, c @ np.array([-axis[1], axis[0]])
+    widths, heights = [], []
+    for start in np.arange(along.min(), along.max(), STATION_M):
+        m = (along >= start) & (along < start + STATION_M)
+        if len(np.unique(fib[m])) == n_fibres:
+            widths.append(np.ptp(across[m]))
+            heights.append(np.ptp(q[m, 2]))
+    return widths, heights
 
 
 def table(run: Path, every: int) -> str:
