@@ -64,6 +64,13 @@ def test_stage_header_counts_beads_and_steps(tmp_path):
                                    "error continue message yes\nrun 1000\n")
     assert stage_header(tmp_path, "in.z", "compaction").endswith(
         "(a run stops at its target: usually sooner)")
+    # a plan's own estimate (the compaction's: its runs are bounds at the step limit)
+    (tmp_path / "plan.json").write_text('{"extra": {"estimated_steps": 400}}')
+    text = stage_header(tmp_path, "in.z", "compaction")
+    seconds = SECONDS_PER_BEAD_STEP * model.n_beads * 400
+    assert text.endswith(f"usually sooner); estimated 400 steps, about {seconds:.2g} s")
+    (tmp_path / "plan.json").write_text('{"extra": {"estimated_steps": 4000}}')
+    assert "estimated" not in stage_header(tmp_path, "in.z", "compaction")  # not below
 
 
 def test_test_command_summary_states_stages_and_the_beads_that_ran():

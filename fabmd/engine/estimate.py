@@ -74,5 +74,22 @@ def stage_header(run_dir: Path, input_name: str, label: str, ranks: int = 1) -> 
     early = (" (a relaxation stops once quasi-static: usually sooner)"
              if any("quasi_static" in c for c in halts) else
              " (a run stops at its target: usually sooner)" if halts else "")
+    estimate = _planned_estimate(run_dir)  # a plan's own estimate, where it has one
+    if estimate and estimate < steps:
+        early += (f"; estimated {estimate:,} steps, about "
+                  f"{_clock(SECONDS_PER_BEAD_STEP * beads * estimate / max(1, ranks))}")
     return (f"{label}: {beads:,} beads, up to {steps:,} steps; rough cost up to "
             f"{_clock(cost)} on {ranks} rank{'s' if ranks > 1 else ''}" + early)
+
+
+def _planned_estimate(run_dir: Path) -> int | None:
+    """``estimated_steps`` of the run folder's ``plan.json`` (the compaction's: its
+    input's runs are bounds at the step limit, halted at the target), None without."""
+    import json
+
+    path = Path(run_dir) / "plan.json"
+    try:
+        value = json.loads(path.read_text()).get("extra", {}).get("estimated_steps")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return int(value) if isinstance(value, (int, float)) and value > 0 else None
