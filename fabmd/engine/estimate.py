@@ -13,6 +13,7 @@ end well before their step budget, so the steps and time are upper bounds.
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -85,8 +86,6 @@ def stage_header(run_dir: Path, input_name: str, label: str, ranks: int = 1) -> 
 def _planned_estimate(run_dir: Path) -> int | None:
     """``estimated_steps`` of the run folder's ``plan.json`` (the compaction's: its
     input's runs are bounds at the step limit, halted at the target), None without."""
-    import json
-
     path = Path(run_dir) / "plan.json"
     try:
         value = json.loads(path.read_text()).get("extra", {}).get("estimated_steps")
