@@ -37,6 +37,11 @@ from _results import table, update_section  # noqa: E402
 
 STORE = HERE / "validation.json"
 ANGLES = (10, 20, 30, 40)
+#: every laboratory's picture-frame curve at 5° (the fabrics' CSVs hold min / max / median)
+CURVES = HERE / "data" / "cao2008_picture_frame_curves.csv"
+#: the measured curves are read by fabmd's locking method on straight lines between their
+#: digitised points, sampled this finely [deg] (the method fits over 5° windows)
+CURVE_STEP_DEG = 0.25
 
 
 @dataclass(frozen=True)
@@ -70,6 +75,53 @@ def measured(test: str = "picture_frame", fabric: str = "plain") -> dict[int, di
             out[int(row["angle_deg"])] = {k: float(row[k]) for k in
                                           ("min_n_mm", "max_n_mm", "median_n_mm")}
     return out
+
+
+def measured_curves(fabric: str = "plain") -> dict[str, tuple[list[float], list[float]]]:
+    """Each laboratory's picture-frame curve of ``fabric``: source → (angles [deg],
+    F_norm [N/mm]), in the order of the CSV."""
+    rows = [line for line in CURVES.read_text().splitlines() if not line.startswith("#")]
+    out: dict[str, tuple[list[float], list[float]]] = {}
+    for row in csv.DictReader(rows):
+        if row["fabric"] == fabric:
+            angles, forces = out.setdefault(row["source"], ([], []))
+            angles.append(float(row["angle_deg"]))
+            forces.append(float(row["f_norm_n_mm"]))
+    return out
+
+
+def measured_locking(fabric: str = "plain") -> dict[str, dict]:
+    """fabmd's locking method (:func:`fabmd.results.curves.locking_angle`, its defaults)
+    on each laboratory's curve, read on straight lines between the digitised points every
+    :data:`CURVE_STEP_DEG`: source → ``{"deg": angle or None, "ends_deg": where the curve
+    ends, "reason": why none}``. The same method as the simulated rows' locking angle, so
+    the two compare like with like (the paper's "≈ 45°" is where the force "begins to
+    increase significantly", read by eye)."""
+    import numpy as np
+
+    from fabmd.results.curves import locking_angle
+
+    out = {}
+    for source, (angles, forces) in measured_curves(fabric).items():
+        x = np.arange(angles[0], angles[-1] + 1e-9, CURVE_STEP_DEG)
+        found = locking_angle(x, np.interp(x, angles, forces))
+        out[source] = {"deg": found["x"] if found["found"] else None,
+                       "ends_deg": angles[-1], "reason": found["reason"]}
+    return out
+
+
+def locking_line(fabric: str = "plain") -> str:
+    """One sentence: the measured curves' locking angles by fabmd's method."""
+    locks = measured_locking(fabric)
+    hit = {s: r["deg"] for s, r in locks.items() if r["deg"] is not None}
+    miss = [f"{s} (ends at {r['ends_deg']:g}°)" for s, r in locks.items() if r["deg"] is None]
+    text = ("fabmd's locking method (`fabmd.results.curves.locking_angle`, as for the "
+            "simulated rows) on each measured curve, read on straight lines between its "
+            "5° points: ")
+    text += ", ".join(f"{s} {d:.1f}°" for s, d in hit.items()) if hit else "none found"
+    if miss:
+        text += "; no departure confirmed before the curve ends: " + ", ".join(miss)
+    return text + "."
 
 
 def picture_frame_record(folder: Path) -> dict:
@@ -150,7 +202,7 @@ def _fabric_tables(key: str, runs: dict, reading: str | None) -> str:
             ("—" if v is None else f"{v / ref[a]['median_n_mm']:.3g}")
             + ("" if v is None or ref[a]["min_n_mm"] <= v <= ref[a]["max_n_mm"]
                else " (outside)") for a, v in zip(ANGLES, vals, strict=True)])
-    text = table(header, rows)
+    text = table(header, rows) + "\n\n" + locking_line(key)
     if ratio_rows:
         text += "\n\nSimulated over the measured median " \
             "(\"outside\": beyond the laboratories' range):\n\n"

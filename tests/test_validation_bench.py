@@ -78,3 +78,37 @@ def test_each_fabric_is_compared_with_its_own_measurements():
     ratio = [line for line in twill_part.splitlines() if line.startswith("| tw |")][-1]
     assert ratio.count("| 1 ") == 4 and "outside" not in ratio  # at the twill's medians
     assert "not stated" in twill_part and "≈ 45" in plain_part
+
+
+def test_laboratory_curves_agree_with_the_summary_ranges():
+    """The per-laboratory curves and the min / max / median file are the same digitisation:
+    at every report angle the curves present give the summary's numbers."""
+    import statistics
+
+    bench = load()
+    for fabric in ("plain", "twill"):
+        curves = bench.measured_curves(fabric)
+        assert len(curves) == (7 if fabric == "plain" else 4)
+        for angle, ref in bench.measured(fabric=fabric).items():
+            values = [f[a.index(angle)] for a, f in curves.values() if angle in a]
+            assert min(values) == ref["min_n_mm"], (fabric, angle)
+            assert max(values) == ref["max_n_mm"], (fabric, angle)
+            assert abs(statistics.median(values) - ref["median_n_mm"]) <= 0.0015, (fabric,
+                                                                                  angle)
+
+
+def test_measured_curves_are_read_by_the_simulated_rows_locking_method():
+    bench = load()
+    locks = bench.measured_locking("plain")
+    assert set(locks) == set(bench.measured_curves("plain"))
+    found = {s: r for s, r in locks.items() if r["deg"] is not None}
+    assert found, "no measured curve reaches a locking angle"
+    for source, r in found.items():
+        # the locking point lies past the initial branch and before the curve ends
+        assert 20.0 < r["deg"] < r["ends_deg"], source
+    for r in locks.values():
+        if r["deg"] is None:
+            assert r["reason"]
+    text = bench.section({})
+    for source in found:
+        assert f"{source} {found[source]['deg']:.1f}°" in text
