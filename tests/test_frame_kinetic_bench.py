@@ -1,0 +1,40 @@
+"""benchmarks/frame_kinetic.py: the work alone against the work less the kinetic energy."""
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load():
+    spec = importlib.util.spec_from_file_location("frame_kinetic_bench",
+                                                  ROOT / "benchmarks" / "frame_kinetic.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["frame_kinetic_bench"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def synthetic(force_n, ke_per_m2):
+    """A frame pulled at a shear resistance ``force_n`` whose fabric's kinetic energy grows
+    as ke_per_m2·d²: the work is F·d + KE."""
+    d = np.linspace(0.0, 0.01, 401)
+    return {"shear_angle_deg": np.degrees(d / 0.01), "displacement_m": d,
+            "kinetic_energy_j": ke_per_m2 * d**2,
+            "external_work_j": force_n * d + ke_per_m2 * d**2}
+
+
+def test_taking_the_kinetic_energy_off_recovers_the_resistance():
+    bench = load()
+    edges = np.arange(5.0, 55.0, 5.0)
+    out = bench.interval_forces(synthetic(2.0, 3.0e3), edges)
+    assert out["net"] == pytest.approx(np.full(len(edges) - 1, 2.0), rel=1e-9)
+    assert np.all(out["work"] > 2.0) and out["share"].max() > 0.05
+    # a twice-as-fast frame (four times the kinetic energy) reads the same net force
+    rows = bench.compare(synthetic(2.0, 1.2e4), synthetic(2.0, 3.0e3))
+    assert rows and all(r[2] in ("+0.0 %", "-0.0 %") for r in rows)
+    assert all(float(r[1].split()[0]) > 1.0 for r in rows)
