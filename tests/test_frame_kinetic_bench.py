@@ -1,22 +1,13 @@
 """benchmarks/frame_kinetic.py: the work alone against the work less the kinetic energy."""
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from .test_benchmarks import load_benchmark
 
 
 def load():
-    spec = importlib.util.spec_from_file_location("frame_kinetic_bench",
-                                                  ROOT / "benchmarks" / "frame_kinetic.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["frame_kinetic_bench"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("frame_kinetic")
 
 
 def synthetic(force_n, ke_per_m2):
