@@ -16,8 +16,9 @@ F = (ΔW − ΔKE)/Δd. The fabric moves with the frame, whose arms turn faster 
 grows at a constant corner speed, so its kinetic energy grows throughout the test: that
 work accelerates the fabric and is not its shear resistance (on the 3D study's 40 mm frame
 it was 25–38 % of the frame's work; taking it off removed about two fifths of the
-difference between plain-weave coupons at two speeds: benchmarks/RESULTS.md "The frame's work into the
-fabric's motion"). Reported the standard way (Harrison et al. 2004):
+difference between plain-weave coupons at two speeds, and took the 3D frame's from about
+30 % to under 9 %: benchmarks/RESULTS.md "The frame's work into the fabric's motion").
+Reported the standard way (Harrison et al. 2004):
 F_s = F/(2 cos θ) and F_norm = F_s·L_frame/L_fabric², L_fabric the side of the
 fabric in the frame (in this model the clamped strips shear with the frame, so
 the whole coupon is the sheared area). With ``clamp_yarns`` the clamps hold whole yarns
