@@ -3,9 +3,10 @@ the force does to the difference between two loading speeds.
 
 The fabric moves with the frame, whose arms turn faster as the shear grows at a constant
 corner speed, so its kinetic energy grows throughout the test. fabmd reports the frame
-force as (ΔW − ΔKE)/Δd (``fabmd.protocols.picture_frame.frame_force_n``); a curve.csv
-keeps the work and the kinetic energy, so the force of the work alone (ΔW/Δd, what was
-reported before 2026-12-05) can be read back from any run.
+force as (ΔW − ΔKE_c)/Δd (``fabmd.protocols.picture_frame.frame_force_n``), KE_c the
+carriage's kinetic energy: the fabric's less its part relative to the frame's affine
+field. A curve.csv keeps the work and both kinetic energies, so the force of the work alone
+(ΔW/Δd, what was reported before 2026-12-05) can be read back from any run.
 
     python benchmarks/frame_kinetic.py FAST SLOW [FAST SLOW ...]   # picture-frame folders
 
@@ -40,12 +41,15 @@ def curve_of(folder: Path) -> dict:
 
 def interval_forces(curve: dict, edges: np.ndarray) -> dict[str, np.ndarray]:
     """Mean frame force over each interval of shear angle [N]: from the work alone
-    (``work``), with the kinetic energy taken off (``net``); and the inertia share
-    |ΔKE|/ΔW (``share``)."""
+    (``work``), with the carriage's kinetic energy taken off (``net``: the kinetic energy
+    less its part relative to the frame's affine field, where the curve has it); and the
+    inertia share |ΔKE|/ΔW of the absolute kinetic energy (``share``, as the verdict)."""
     at = lambda y: np.interp(edges, curve["shear_angle_deg"], y)  # noqa: E731
-    dw, dke = np.diff(at(curve["external_work_j"])), np.diff(at(curve["kinetic_energy_j"]))
-    dd = np.diff(at(curve["displacement_m"]))
-    return {"work": dw / dd, "net": (dw - dke) / dd, "share": np.abs(dke) / np.abs(dw)}
+    ke = curve["kinetic_energy_j"]
+    carriage = ke - curve["kinetic_relative_j"] if "kinetic_relative_j" in curve else ke
+    dw, dke = np.diff(at(curve["external_work_j"])), np.diff(at(ke))
+    dkc, dd = np.diff(at(carriage)), np.diff(at(curve["displacement_m"]))
+    return {"work": dw / dd, "net": (dw - dkc) / dd, "share": np.abs(dke) / np.abs(dw)}
 
 
 def compare(fast: dict, slow: dict, start_deg: float = 5.0) -> list[list[str]]:
