@@ -65,12 +65,16 @@ FABRICS = {
                       "4 curves (UML, UT, KUL 1st / 3rd run)", None, "not stated"),
 }
 
+def _data_rows(path: Path) -> csv.DictReader:
+    """The rows of one of ``benchmarks/data``'s CSV files (its ``#`` header lines left out)."""
+    return csv.DictReader(line for line in path.read_text().splitlines()
+                          if not line.startswith("#"))
+
+
 def measured(test: str = "picture_frame", fabric: str = "plain") -> dict[int, dict[str, float]]:
     """Per angle: min, max, median F_norm [N/mm] of the laboratories (the fabric's CSV)."""
-    rows = [line for line in FABRICS[fabric].data.read_text().splitlines()
-            if not line.startswith("#")]
     out = {}
-    for row in csv.DictReader(rows):
+    for row in _data_rows(FABRICS[fabric].data):
         if row["test"] == test:
             out[int(row["angle_deg"])] = {k: float(row[k]) for k in
                                           ("min_n_mm", "max_n_mm", "median_n_mm")}
@@ -80,9 +84,8 @@ def measured(test: str = "picture_frame", fabric: str = "plain") -> dict[int, di
 def measured_curves(fabric: str = "plain") -> dict[str, tuple[list[float], list[float]]]:
     """Each laboratory's picture-frame curve of ``fabric``: source → (angles [deg],
     F_norm [N/mm]), in the order of the CSV."""
-    rows = [line for line in CURVES.read_text().splitlines() if not line.startswith("#")]
     out: dict[str, tuple[list[float], list[float]]] = {}
-    for row in csv.DictReader(rows):
+    for row in _data_rows(CURVES):
         if row["fabric"] == fabric:
             angles, forces = out.setdefault(row["source"], ([], []))
             angles.append(float(row["angle_deg"]))
