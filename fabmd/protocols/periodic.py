@@ -35,6 +35,7 @@ from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
 from ..results.figure import report_marks
+from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
@@ -57,8 +58,17 @@ def check_periodic_cell(model: BeadModel, who: str) -> None:
 class _PeriodicCellTest(RelaxedDrivenTest):
     """Box-deformation test of a periodic cell (shared machinery): the loading, contact,
     output and ``relax`` fields of :class:`~fabmd.protocols.driven.RelaxedDrivenTest`,
-    ``speed_fraction`` that of the moving box face, fewer curve points and frames."""
+    ``speed_fraction`` that of the moving box face, fewer curve points and frames.
 
+    Args:
+        drag: ``"affine"`` (default): the drag acts on the beads' motion relative to the
+            box's affine velocity field (the cell's deformation carries the fabric; a drag
+            on the absolute velocity took half the work of a plain-weave cell's shear below
+            20°, ``benchmarks/RESULTS.md`` "Periodic shear: drag and the yarns' stretch");
+            ``"absolute"``: on the absolute velocity. :mod:`fabmd.scene.drag`.
+    """
+
+    drag: str = "affine"
     samples: int = 100
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
 
@@ -79,22 +89,40 @@ class _PeriodicCellTest(RelaxedDrivenTest):
     def transverse_block(self, model: BeadModel) -> str:
         return "# transverse size held"
 
+    #: the entries of the box's velocity gradient L = ḣ·h⁻¹ that the test moves (LAMMPS
+    #: variables of ``periodic_cell.lmp``)
+    box_gradient: ClassVar[dict[str, str]] = {}
+
+    def affine_field(self, model: BeadModel) -> AffineField:
+        """The box's affine velocity field, L·(r − r0), r0 the beads' mean position at the
+        start (the fabric's centre of mass does not move, so the field leaves it at rest)."""
+        centre = model.positions[:, :2].mean(axis=0)
+        return AffineField(origin_m=(float(centre[0]), float(centre[1])), tools="box faces",
+                           **self.box_gradient)
+
     def input_text(self, model: BeadModel) -> str:
         check_periodic_cell(model, self.protocol)
         dt = self.time_step_s(model)
         ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
+        field = self.affine_field(model)
+        damping, damping_power = self.drag_block(model, field)
+        # the affine drag's +γ·v_affine (an addforce) is in f too: the box power takes it out
+        affine = self.drag == "affine"
+        refs = {a: f"-v_drag_f{a}" if affine and any(k[0] == a for k in field.gradient())
+                else "" for a in ("x", "y")}
         outputs = self.outputs_block(
             model, "# power of the box deformation: v_p_box (above)", "v_p_box",
             mean_values="v_nxx v_nyy v_nxy",
             mean_names="n_xx_n_m n_yy_n_m n_xy_n_m",
             print_values="${s} $(lx:%.12g) $(ly:%.12g) $(xy:%.12g)",
             print_names="boundary_travel_m box_lx_m box_ly_m box_xy_m",
-            thermo_values="v_s lx ly xy v_nxx v_nyy v_nxy")
+            thermo_values="v_s lx ly xy v_nxx v_nyy v_nxy", damping_power=damping_power,
+            affine=field if affine else None)
         text = render("periodic_cell", title=self.title,
                       relax=self.relax_block(model, "clamps", "free", 1e-3 * ea),
-                      box_motion=self.box_motion(model),
+                      box_motion=self.box_motion(model), damping=damping,
                       transverse=self.transverse_block(model), gamma=self.gamma(model),
-                      outputs=outputs)
+                      drag_fx=refs["x"], drag_fy=refs["y"], outputs=outputs)
         return self.scene_text(model, dt, text)
 
     def _schedule(self, model: BeadModel) -> dict[str, str]:
@@ -128,6 +156,7 @@ class PeriodicTension(_PeriodicCellTest):
     """
 
     protocol = "periodic_tension"
+    box_gradient = {"xx": "v_lg_xx"}
     title = "uniaxial tension along x"
     rate_curve = ("strain_pct", "force_per_width_n_m")
     rate_keys = {"initial_stiffness_change": "initial_stiffness_n_m_per_width"}
@@ -219,6 +248,7 @@ class PeriodicShear(_PeriodicCellTest):
     """
 
     protocol = "periodic_shear"
+    box_gradient = {"xy": "v_lg_xy", "yy": "v_lg_yy"}
     title = "trellis shear"
     rate_curve = ("shear_angle_deg", "normalised_force_n_m")
     rate_keys = {"initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
