@@ -159,6 +159,7 @@ class PeriodicTension(_PeriodicCellTest):
     box_gradient = {"xx": "v_lg_xx"}
     title = "uniaxial tension along x"
     rate_curve = ("strain_pct", "force_per_width_n_m")
+    interval_axis = ("strain_pct", 0.25)
     rate_keys = {"initial_stiffness_change": "initial_stiffness_n_m_per_width"}
 
     max_strain_pct: float = 2.0
@@ -251,6 +252,7 @@ class PeriodicShear(_PeriodicCellTest):
     box_gradient = {"xy": "v_lg_xy", "yy": "v_lg_yy"}
     title = "trellis shear"
     rate_curve = ("shear_angle_deg", "normalised_force_n_m")
+    interval_axis = ("shear_angle_deg", 5.0)
     rate_keys = {"initial_stiffness_change": "initial_shear_stiffness_n_m_per_rad"}
 
     max_shear_angle_deg: float = 40.0
