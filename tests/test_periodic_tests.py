@@ -82,6 +82,7 @@ def test_woven_cell_in_tension(woven_cell, tmp_path):
     assert result.curve["force_per_width_n_m"][-1] > result.curve["force_per_width_n_m"][1]
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
+    assert s["quasi_static_intervals"]["width"] == 0.25  # per 0.25 % of strain
     assert (result.run_dir / "curve.png").exists()
 
 
@@ -95,6 +96,10 @@ def test_woven_cell_in_trellis_shear(woven_cell, tmp_path):
     assert s["locking"]["found"] and s["locking_angle_deg"] < 45
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
+    # judged per 5 deg of shear, as the picture frame; each sample carries its interval's
+    iv = s["quasi_static_intervals"]
+    assert iv["width"] == 5.0 and len(iv["intervals"]) == 9
+    assert set(c["interval_quasi_static"]) <= {0.0, 1.0}
     # the trajectory of the sheared (triclinic) cell keeps its tilt: xy = b sin(gamma)
     assert s["trajectory"] == "trajectory.h5"
     b = woven_cell.box_hi[1] - woven_cell.box_lo[1]
