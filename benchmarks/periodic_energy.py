@@ -6,8 +6,9 @@ RUN: a ``fabmd test periodic-shear`` folder (its ``periodic_shear`` subfolder is
 that subfolder. For each run and interval: the box's work [µJ], what of it went into the
 bonds' strain energy (the fibres' stretch), the contacts' elastic energy, the drag and the
 kinetic energy, the rest (friction at the contacts, and what the contacts' tangential
-springs keep), and the work's difference from the *last* run named (the reference). The
-work is read at the interval's ends from the cumulative columns of ``curve.csv``.
+springs keep; "nan": not sampled, e.g. the contacts' energy in a standalone run), and the
+work's difference from the *last* run named (the reference). The work is read at the
+interval's ends from the cumulative columns of ``curve.csv``.
 """
 
 from __future__ import annotations
@@ -39,17 +40,20 @@ def read_curve(path: Path) -> dict[str, np.ndarray]:
 
 def interval_split(curve: dict[str, np.ndarray], width_deg: float = 5.0) -> list[dict]:
     """Per interval of shear [deg]: the change of each cumulative column [J] and the rest,
-    work − (bonds + contacts + drag + kinetic)."""
+    work − (bonds + contacts + drag + kinetic). A column the run did not sample (the
+    contacts' energy of a standalone run) reads NaN and the rest then holds it."""
     g = curve["shear_angle_deg"]
     out = []
     for lo in np.arange(0.0, float(g.max()) - 1e-9, width_deg):
         ends = [lo, min(lo + width_deg, float(g.max()))]
         row = {"from": float(lo), "to": ends[1]}
         for name, col in COLUMNS.items():
-            ok = np.isfinite(curve[col])
-            row[name] = float(np.diff(np.interp(ends, g[ok], curve[col][ok]))[0])
+            values = curve.get(col, np.full(len(g), np.nan))
+            ok = np.isfinite(values)
+            row[name] = (float(np.diff(np.interp(ends, g[ok], values[ok]))[0]) if ok.any()
+                         else float("nan"))
         row["rest"] = row["work"] - sum(row[k] for k in ("bonds", "contacts", "drag",
-                                                          "kinetic"))
+                                                          "kinetic") if np.isfinite(row[k]))
         out.append(row)
     return out
 

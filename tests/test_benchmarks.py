@@ -444,3 +444,9 @@ def test_periodic_energy_splits_each_interval_of_the_work(tmp_path, capsys):
     bench.main([str(tmp_path / "ps")])
     out = capsys.readouterr().out
     assert "| 10–15 | " in out and out.count("+0.0 %") == 4
+    # a run without the contacts' energy (standalone): NaN, and the rest holds it
+    del cols["contact_energy_j"]
+    (run / "curve.csv").write_text(",".join(cols) + "\n" + "\n".join(
+        ",".join(repr(float(c[i])) for c in cols.values()) for i in range(len(g))) + "\n")
+    row = bench.interval_split(bench.read_curve(tmp_path / "ps"))[2]
+    assert np.isnan(row["contacts"]) and row["rest"] == pytest.approx(25e-6)
