@@ -9,6 +9,7 @@ over the width of a yarn that narrows with the cell's affine deformation (w0·co
 width after the start-up, frame 1) and the fabric's span (bead centres).
 
     python benchmarks/periodic_sections.py RUN [RUN ...]
+    python benchmarks/periodic_sections.py --fibres RUN [RUN ...]   # fibre by fibre
 
 RUN: a ``fabmd test periodic-shear`` folder (its ``periodic_shear`` subfolder is found) or
 that subfolder itself.
@@ -36,24 +37,48 @@ def cell_sections(pos: np.ndarray, lx: float, ly: float, xy: float, fibre: np.nd
     """Mean width and height [m] of the yarns at stations along them, in a cell with box
     vectors a = (lx, 0), b = (xy, ly); ``fibre`` the 1-based fibre of each bead,
     ``fibre_yarn`` the 1-based yarn of each fibre."""
+    widths, heights = [], []
+    for q, fib in aligned_yarns(pos, lx, ly, xy, fibre, fibre_yarn):
+        w, h = station_spreads(q, fib)
+        widths += w
+        heights += h
+    return float(np.mean(widths)), float(np.mean(heights))
+
+
+def aligned_yarns(pos: np.ndarray, lx: float, ly: float, xy: float, fibre: np.ndarray,
+                  fibre_yarn: np.ndarray):
+    """Per yarn (in order): its beads' positions with each fibre moved to the periodic image
+    nearest the yarn's first fibre, and the beads' fibres (box vectors as
+    :func:`cell_sections`)."""
     a, b = np.array([lx, 0.0]), np.array([xy, ly])
     yarn_of_bead = fibre_yarn[fibre - 1]
-    widths, heights = [], []
     for yarn in np.unique(yarn_of_bead):
         sel = yarn_of_bead == yarn
         q, fib = pos[sel].copy(), fibre[sel]
         fibres = np.unique(fib)
         ref = q[fib == fibres[0], :2].mean(axis=0)
-        for f in fibres:  # the image of each fibre nearest the yarn's first fibre
+        for f in fibres:
             m = fib == f
             d = q[m, :2].mean(axis=0) - ref
             j = np.round(d[1] / ly)
             i = np.round((d[0] - j * xy) / lx)
             q[m, :2] -= i * a + j * b
-        w, h = station_spreads(q, fib)
-        widths += w
-        heights += h
-    return float(np.mean(widths)), float(np.mean(heights))
+        yield q, fib
+
+
+def fibre_offsets(pos: np.ndarray, lx: float, ly: float, xy: float, fibre: np.ndarray,
+                  fibre_yarn: np.ndarray) -> list[np.ndarray]:
+    """Per yarn: each fibre's offset across it [m] (its mean in-plane position less the
+    yarn's, along the normal to the yarn's first fibre's chord), fibres in id order."""
+    out = []
+    for q, fib in aligned_yarns(pos, lx, ly, xy, fibre, fibre_yarn):
+        fibres = np.unique(fib)
+        first = q[fib == fibres[0], :2]
+        chord = first[-1] - first[0]
+        normal = np.array([-chord[1], chord[0]]) / np.linalg.norm(chord)
+        means = np.array([q[fib == f, :2].mean(axis=0) for f in fibres])
+        out.append((means - means.mean(axis=0)) @ normal)
+    return out
 
 
 def table(run: Path) -> str:
@@ -79,10 +104,41 @@ def table(run: Path) -> str:
     return "\n".join(lines)
 
 
+def fibre_table(run: Path) -> str:
+    """Per frame: the range over the yarns' off-centre fibres (offset after the start-up
+    above a quarter of the yarn's largest) of offset / (offset after the start-up · cos γ):
+    1 where every fibre follows the box's affine field, 1/cos γ where the yarn keeps its
+    width."""
+    folder = run_folder(run)
+    with open_trajectory(folder / "trajectory.h5") as f:
+        pos = read_lengths(f["particles/all/position/value"])
+        edges = read_lengths(f["particles/all/box/edges/value"])
+        tilt = read_lengths(f["observables/box_tilt/value"])
+        fibre = f["particles/all/fibre_id"][:]
+        fibre_yarn = f["parameters/fabmd/fibre_yarn"][:]
+    offsets = [fibre_offsets(pos[k], edges[k][0], edges[k][1], tilt[k][0], fibre, fibre_yarn)
+               for k in range(len(pos))]
+    ref = min(1, len(pos) - 1)
+    lines = [f"{folder}: each fibre's offset across its yarn / (its start-up offset · cos γ)",
+             "| angle [°] | smallest | largest | 1/cos γ (width kept) |", "|---|---|---|---|"]
+    for k in range(ref + 1, len(pos)):
+        cos_g = min(1.0, edges[k][1] / edges[ref][1])
+        ratios = np.concatenate([
+            (o / o0)[np.abs(o0) > 0.25 * np.abs(o0).max()] / cos_g
+            for o, o0 in zip(offsets[k], offsets[ref], strict=True)])
+        lines.append(f"| {np.degrees(np.arccos(cos_g)):.1f} | {ratios.min():.3f} | "
+                     f"{ratios.max():.3f} | {1 / cos_g:.3f} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("runs", nargs="+", type=Path, help="periodic-shear folders")
-    print("\n\n".join(table(run) for run in parser.parse_args(argv).runs))
+    parser.add_argument("--fibres", action="store_true",
+                        help="each fibre's offset across its yarn against the affine one")
+    args = parser.parse_args(argv)
+    show = fibre_table if args.fibres else table
+    print("\n\n".join(show(run) for run in args.runs))
     return 0
 
 

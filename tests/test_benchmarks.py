@@ -413,6 +413,14 @@ def test_periodic_sections_read_affine_yarns_as_w_cos_gamma_across_images():
         assert height == pytest.approx(0.1e-3, rel=1e-6)
         width, _ = bench.cell_sections(np.vstack(kept), lx, ly, xy, fibre, yarn_of_fibre)
         assert width == pytest.approx(w, rel=1e-6)
+        # fibre by fibre (--fibres): offsets across the yarn follow cos(gamma) when affine
+        # (also for the fibre an image away), stay when the width is kept
+        offsets = bench.fibre_offsets(pos, lx, ly, xy, fibre, yarn_of_fibre)
+        start = np.linspace(-w / 2, w / 2, 5)
+        for o in offsets:
+            assert o == pytest.approx(start * np.cos(g), abs=1e-9)
+        for o in bench.fibre_offsets(np.vstack(kept), lx, ly, xy, fibre, yarn_of_fibre):
+            assert o == pytest.approx(start, abs=1e-9)
 
 
 def test_periodic_energy_splits_each_interval_of_the_work(tmp_path, capsys):
