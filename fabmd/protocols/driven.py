@@ -435,23 +435,22 @@ class RelaxedDrivenTest(DrivenTest):
 
     Args:
         relax: stop criterion of the free relaxation before the test (clamps held).
+        drag: ``"affine"`` (default): the drag acts on the motion relative to the affine
+            velocity field the clamps, frame or box impose (what the protocol's docstring
+            says it holds), so it does not add to their force; ``"absolute"``: on the
+            absolute velocity (on the plain-weave example's periodic cell it was half the
+            shear work below 20°, ``benchmarks/RESULTS.md`` "Periodic shear: drag and the
+            yarns' stretch"). :mod:`fabmd.scene.drag`.
     """
 
     relax: QuasiStatic = field(default_factory=lambda: QuasiStatic(max_steps=50_000))
+    drag: str = "affine"
 
 
 @dataclass(frozen=True, kw_only=True)
 class ClampedTest(RelaxedDrivenTest):
-    """A coupon held by moving clamps (tension, bias extension, picture frame).
-
-    Args:
-        drag: ``"affine"`` (default): the drag acts on the motion relative to the
-            clamps' affine velocity field (what the protocol's docstring says it holds),
-            so it does not add to the clamp force; ``"absolute"``: on the absolute
-            velocity. :mod:`fabmd.scene.drag`.
-    """
-
-    drag: str = "affine"
+    """A coupon held by moving clamps (tension, bias extension, picture frame); its
+    ``drag`` (:class:`RelaxedDrivenTest`) is relative to the clamps' affine field."""
 
     quasi_static_note = (
         "kinetic energy of the free fabric (relative to the clamps' or frame's affine field: "

@@ -35,7 +35,7 @@ from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..results.curves import bilinear_fit, tangent_intersection, values_at
 from ..results.figure import report_marks
-from ..scene.drag import AffineField
+from ..scene.drag import AffineField, affine_force_names
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
@@ -58,17 +58,9 @@ def check_periodic_cell(model: BeadModel, who: str) -> None:
 class _PeriodicCellTest(RelaxedDrivenTest):
     """Box-deformation test of a periodic cell (shared machinery): the loading, contact,
     output and ``relax`` fields of :class:`~fabmd.protocols.driven.RelaxedDrivenTest`,
-    ``speed_fraction`` that of the moving box face, fewer curve points and frames.
+    ``speed_fraction`` that of the moving box face, fewer curve points and frames; the
+    ``drag`` (default ``"affine"``) acts relative to the box's affine velocity field."""
 
-    Args:
-        drag: ``"affine"`` (default): the drag acts on the beads' motion relative to the
-            box's affine velocity field (the cell's deformation carries the fabric; a drag
-            on the absolute velocity took half the work of a plain-weave cell's shear below
-            20°, ``benchmarks/RESULTS.md`` "Periodic shear: drag and the yarns' stretch");
-            ``"absolute"``: on the absolute velocity. :mod:`fabmd.scene.drag`.
-    """
-
-    drag: str = "affine"
     samples: int = 100
     trajectory: TrajectoryOutput = field(default_factory=lambda: TrajectoryOutput(frames=10))
 
@@ -108,8 +100,8 @@ class _PeriodicCellTest(RelaxedDrivenTest):
         damping, damping_power = self.drag_block(model, field)
         # the affine drag's +γ·v_affine (an addforce) is in f too: the box power takes it out
         affine = self.drag == "affine"
-        refs = {a: f"-v_drag_f{a}" if affine and any(k[0] == a for k in field.gradient())
-                else "" for a in ("x", "y")}
+        refs = {a: f"-{name}" if affine and name else ""
+                for a, name in affine_force_names(field).items()}
         outputs = self.outputs_block(
             model, "# power of the box deformation: v_p_box (above)", "v_p_box",
             mean_values="v_nxx v_nyy v_nxy",

@@ -97,18 +97,25 @@ def drag_commands(kind: str, group: str, gamma_kg_s: float,
     grad = field.gradient()
     coefficients = "\n".join(render_inline("affine_drag_coefficient", component=k, gamma=g,
                                            gradient=e) for k, e in grad.items())
-    forces, refs = [], {}
+    forces = []
     for axis in _AXES:
         terms = [f"v_drag_k{k}*{field.offset(k[1])}" for k in grad if k[0] == axis]
         if terms:
             forces.append(render_inline("affine_drag_force", axis=axis,
                                         expression="+".join(terms)))
-        refs[axis] = f"v_drag_f{axis}" if terms else "0.0"
+    refs = {axis: name or "0.0" for axis, name in affine_force_names(field).items()}
     text = render("affine_drag", tools=field.tools, affine_vx=field.vx, affine_vy=field.vy,
                   gamma=g, group=group, coefficients=coefficients or "# (no gradient)",
                   forces="\n".join(forces) or "# (no affine force)", fx=refs["x"],
                   fy=refs["y"])
     return text, damping_power(group, gamma_kg_s, field)
+
+
+def affine_force_names(field: AffineField) -> dict[str, str]:
+    """Per axis ("x", "y"): the atom variable holding the affine drag's +γ·v_affine
+    (``affine_drag_force.lmp``), or "" where the field has no gradient along it."""
+    rows = {k[0] for k in field.gradient()}
+    return {axis: f"v_drag_f{axis}" if axis in rows else "" for axis in _AXES}
 
 
 def damping_power(group: str, gamma_kg_s: float, field: AffineField | None = None) -> str:
