@@ -67,6 +67,12 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     check_scene(scene)
     targets, notes = targets_from_scene(scene, settings)
     base = crimp_stage(scene)
+    if (base.target_tension is not None and targets.crimp_by == "loose_height"
+            and targets.target_tension is None):
+        # the crimp's own tension target is the one reached beside the crimp
+        targets = dataclasses.replace(targets, target_tension=base.target_tension)
+        base = dataclasses.replace(base, target_tension=None)
+        notes.append("tension target from [crimp] target_tension")
     if base.target_tension is not None:
         raise InputError(f"{where}: [crimp] target_tension searches the expansion itself: "
                          f"for a calibration give it as [calibrate] target_tension instead")
@@ -80,6 +86,7 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     cell = periodic_cell(scene)
     check_targets(cell, targets, base, tuple(targets.thickness_families
                                              or default_thickness_families(cell)), compaction)
+    tall, tall_range = _loose_heights(scene, targets, text, where)
     if preset != "default":
         notes.append(f"run with the preset --{preset}: crimp calibrated.toml with it too")
     engine = engine or Engine(progress=False)
@@ -87,12 +94,15 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     work = begin_run(out, overwrite=overwrite, prefix="calibration")
     try:
         result = calibrate(cell, targets, base=base, out=work, engine=trial_engine,
-                           compaction=compaction, on_run=on_run, notes=notes)
+                           compaction=compaction, on_run=on_run, notes=notes,
+                           cell_for=lambda h: _drawn(scene.with_yarn_heights(h)),
+                           loose_height_m=tall, loose_height_range=tall_range)
         calibrated = final = None
         if result.controlled_reached and text is not None:
             calibrated = work / CALIBRATED
-            new_text = with_expansion(text, result.expansion, where, header=_header(
-                scene, result, preset))
+            new_text = with_expansion(
+                with_yarn_heights(text, result.summary.get("loose_height_m") or {}, where),
+                result.expansion, where, header=_header(scene, result, preset))
             if mpi.is_root():
                 calibrated.write_text(new_text)
             mpi.barrier()
@@ -117,8 +127,61 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
 def _header(scene: Scene, result: CalibrationResult, preset: str) -> str:
     fams = ", ".join(f"{f} {v:+.5g}" for f, v in sorted(result.expansion.items()))
     run = "" if preset == "default" else f" with --{preset}"
+    heights = result.summary.get("loose_height_m") or {}
+    tall = "".join(f", [yarns.{f}] height_m {_mm(h)}" for f, h in sorted(heights.items()))
     return (f"# fabmd calibrate{run}: {Path(scene.source).name} with [crimp] expansion "
-            f"{fams} (run {result.best_run} of {len(result.runs)}); nothing else changed\n")
+            f"{fams}{tall} (run {result.best_run} of {len(result.runs)}); nothing else "
+            f"changed\n")
+
+
+def _mm(height_m: float) -> str:
+    return f"{1e3 * height_m:.6g} mm"
+
+
+def _loose_heights(scene: Scene, targets, text: str | None,
+                   where: str) -> tuple[dict | None, dict | None]:
+    """With ``crimp_by = "loose_height"``: the scene's loose section height per family
+    whose crimp is a target [m] and the range of relative changes (within
+    :data:`~fabmd.protocols.calibrate_knobs.LOOSE_HEIGHT_RANGE`, on a 0.05 grid) at which
+    the section can be drawn, after checking (before LAMMPS) that the heights can be
+    written back into the file; (None, None) otherwise."""
+    if targets.crimp_by != "loose_height":
+        return None, None
+    from .protocols.calibrate_knobs import LOOSE_HEIGHT_RANGE
+
+    specs = scene.fabric.specs()
+    h0 = {fam: float(specs[fam].height_m) for fam in targets.crimp_pct if fam in specs}
+    scene.with_yarn_heights(h0)  # overrides are refused here
+    ranges = {}
+    for fam, h in h0.items():
+        lo, hi = LOOSE_HEIGHT_RANGE
+        steps = [round(lo + 0.05 * k, 2) for k in range(int(round((hi - lo) / 0.05)) + 1)]
+        drawable = [s for s in steps if _drawable(scene, {fam: h * (1 + s)})]
+        if not drawable or drawable[0] > 0 or drawable[-1] < 0:
+            raise InputError(f"{where}: the {fam} yarns' loose section cannot be drawn "
+                             f"much lower or higher than {_mm(h)} (tried {lo:+.2f} … "
+                             f"{hi:+.2f} of it), so the loose height cannot reach a crimp")
+        ranges[fam] = (drawable[0], drawable[-1])
+    if text is not None:
+        with_yarn_heights(text, h0, where)
+    return h0, ranges
+
+
+def _drawn(scene: Scene):
+    """The loose periodic cell of ``scene``, its crimp's contact and its compaction (for
+    the contact of the platens' run): what one loose-height trial needs."""
+    return (periodic_cell(scene), crimp_stage(scene).contact,
+            protocol_stage(scene, "compaction"))
+
+
+def _drawable(scene: Scene, heights_m: dict[str, float]) -> bool:
+    """Whether the fabric can be drawn with these loose heights (the section holds the
+    filaments below the packing limit, a racetrack is no taller than wide...)."""
+    try:
+        scene.with_yarn_heights(heights_m)
+    except InputError:
+        return False
+    return True
 
 
 def _final_crimp(calibrated: Path, folder: Path, engine: Engine, preset: str,
@@ -141,7 +204,56 @@ def _final_crimp(calibrated: Path, folder: Path, engine: Engine, preset: str,
     return final
 
 
-# ---- the scene file with a new [crimp] expansion ---------------------------------------
+# ---- the scene file with new loose heights and a new [crimp] expansion ------------------
+_HEIGHT = re.compile(r"^(\s*)(height_m|fibre_volume_fraction)\s*=")
+
+
+def with_yarn_heights(text: str, heights_m: dict[str, float], where: str = "scene") -> str:
+    """``text`` (a scene file) with ``[yarns.<family>] height_m`` set to ``heights_m``
+    (a ``fibre_volume_fraction`` there, which would size the height, taken out) and
+    nothing else changed: checked by parsing both.
+
+    Raises:
+        InputError: a family's yarn table is not a ``[yarns.<family>]`` table of its own.
+    """
+    if not heights_m:
+        return text
+    data = tomllib.loads(text)
+    lines = text.splitlines(keepends=True)
+    wanted = {**data, "yarns": {k: dict(v) for k, v in data.get("yarns", {}).items()}}
+    for fam, height in heights_m.items():
+        headers = [i for i, line in enumerate(lines) if _HEADER.match(line)
+                   and not line.lstrip().startswith("[[")]
+        start = next((i for i in headers if _HEADER.match(lines[i]).group(1).replace(
+            " ", "") == f"yarns.{fam}"), None)
+        if start is None or fam not in wanted["yarns"]:
+            raise InputError(f"{where}: cannot write the calibrated loose height of the "
+                             f"{fam} yarns: no [yarns.{fam}] table of its own in the file")
+        end = next((i for i in headers if i > start), len(lines))
+        end = next((i for i in range(start + 1, end) if lines[i].lstrip().startswith("[[")),
+                   end)  # an [[yarns.<family>.overrides]] table ends it too
+        new_line = f'height_m = "{_mm(height)}"  # fabmd calibrate\n'
+        body = lines[start + 1:end]
+        at = next((i for i, line in enumerate(body) if _HEIGHT.match(line)
+                   and _HEIGHT.match(line).group(2) == "height_m"), None)
+        if at is not None:  # in place, with its indentation
+            body[at] = _HEIGHT.match(body[at]).group(1) + new_line
+        body = [line for i, line in enumerate(body) if i == at or not _HEIGHT.match(line)]
+        lines[start + 1:end] = ([] if at is not None else [new_line]) + body
+        table = {k: v for k, v in wanted["yarns"][fam].items()
+                 if k not in ("height_m", "fibre_volume_fraction")}
+        wanted["yarns"][fam] = {**table, "height_m": _mm(height)}
+    new = "".join(lines)
+    try:
+        got = tomllib.loads(new)
+    except tomllib.TOMLDecodeError as exc:
+        got = {"error": str(exc)}
+    if got != wanted:
+        raise InputError(f"{where}: cannot write the calibrated loose heights into this file "
+                         f"without changing something else (a dotted or inline yarn "
+                         f"table?); write each [yarns.<family>] as a table of its own")
+    return new
+
 _HEADER = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\s\"']+?)\s*\]\s*(#.*)?$")
 _EXPANSION = re.compile(r"^(\s*)expansion\s*=")
 

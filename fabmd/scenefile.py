@@ -185,6 +185,36 @@ class Scene:
             fabric = dataclasses.replace(fabric, **specs)
         if spacing_ratio is not None:
             disc = dataclasses.replace(disc, spacing_ratio=spacing_ratio)
+        return self._with(fabric, disc, "rediscretised", changed=n_fibres is not None,
+                          what=f"{n_fibres} fibres per yarn")
+
+    def with_yarn_heights(self, heights_m: dict[str, float]) -> Scene:
+        """This scene with the loose section of each named family ``heights_m[family]``
+        high (m; width, tex and count unchanged, so the yarn's packing changes); the
+        contact is derived again where a compaction law makes it depend on the virtual
+        fibre's diameter (which follows the section). Families with overrides are
+        refused: which of their yarns would change is not clear."""
+        specs = self.fabric.specs()
+        unknown = set(heights_m) - set(specs)
+        if unknown:
+            raise InputError(f"Scene.with_yarn_heights: the fabric has no families "
+                             f"{sorted(unknown)} (it has {list(specs)})")
+        over = sorted({o.family for o in self.fabric.overrides} & set(heights_m))
+        if over:
+            raise InputError(f"the loose height of {over} cannot be changed alone: their "
+                             f"yarns have [[yarns.<family>.overrides]]; give the height in "
+                             f"each override instead")
+        new = {fam: dataclasses.replace(specs[fam], height_m=float(h),
+                                        fibre_volume_fraction=None)
+               for fam, h in heights_m.items()}
+        fabric = dataclasses.replace(self.fabric, **new)
+        return self._with(fabric, self.discretisation, "with_yarn_heights", changed=True,
+                          what="the new section")
+
+    def _with(self, fabric: Fabric, disc: Discretisation, caller: str, changed: bool,
+              what: str) -> Scene:
+        """This scene with ``fabric`` and ``disc``, the contact derived again from its
+        table where a law ties it to the virtual fibre."""
         contact, where = self.contact, self.source or "scene"
         # the table rebuilds the contact only while the scene still has the one it gave
         # (a contact replaced in code is kept, or refused below if it has a law)
@@ -192,12 +222,12 @@ class Scene:
             self.contact_table, self.fabric, self.discretisation, where))
         if from_table:
             contact = _contact(self.contact_table, fabric, disc, where)
-        elif n_fibres is not None and (contact.within_family_law is not None
-                                       or contact.within_family_stiffness_pa is not None):
-            raise InputError("Scene.rediscretised: this scene's contact was not built from "
-                             "its [contact] table (built or replaced in Python) and depends "
-                             "on the fibre through a compaction law; build it again for "
-                             f"{n_fibres} fibres per yarn")
+        elif changed and (contact.within_family_law is not None
+                          or contact.within_family_stiffness_pa is not None):
+            raise InputError(f"Scene.{caller}: this scene's contact was not built from "
+                             f"its [contact] table (built or replaced in Python) and depends "
+                             f"on the fibre through a compaction law; build it again for "
+                             f"{what}")
         return dataclasses.replace(self, fabric=fabric, discretisation=disc, contact=contact)
 
     def to_dict(self) -> dict:

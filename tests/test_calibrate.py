@@ -191,6 +191,9 @@ def test_targets_come_from_the_table_and_the_datasheet(tmp_path):
     ('target_tension = "-2 N"', r"calibrate.target_tension must be > 0"),
     ('max_runs = 8\n', r"nothing to calibrate"),
     ('thickness_m = "1 mm"\nstrain_range = [0.1, -0.1]', r"strain_range must be"),
+    ('crimp_pct = { weft = 1.0 }\ncrimp_by = "height"',
+     r"crimp_by must be one of expansion, loose_height, got 'height'"),
+    ('target_tension = "1 N"\ncrimp_by = "loose_height"', r"give calibrate.crimp_pct too"),
 ])
 def test_bad_calibrate_table_fails_before_lammps(tmp_path, capsys, table, words):
     path = scene_file(tmp_path, f"\n[calibrate]\n{table}\n")
@@ -204,7 +207,9 @@ def test_bad_calibrate_table_fails_before_lammps(tmp_path, capsys, table, words)
 
 @pytest.mark.parametrize("extra,words", [
     ('\n[calibrate]\ncrimp_pct = { weft = 1.0 }\ntarget_tension = { weft = "1 N" }\n'
-     'thickness_families = ["warp"]\nthickness_m = "1 mm"\n', "serves one target"),
+     'thickness_families = ["warp"]\nthickness_m = "1 mm"\n',
+     'serves one target (the other follows from it); give one of them, or reach the crimp '
+     'by the loose height (calibrate.crimp_by = "loose_height")'),
     ('\n[calibrate]\nthickness_m = "5 mm"\n', "not below the loose fabric"),
     ('\n[calibrate]\ncrimp_pct = { binder = 1.0 }\n', "the fabric has"),
 ])
@@ -264,6 +269,49 @@ def test_calibrated_file_changes_the_expansion_and_nothing_else():
     assert got["tension"] == {"max_elongation_pct": 2.0}
     with pytest.raises(InputError, match="not a \\[crimp\\] table"):
         with_expansion('crimp.expansion.warp = -0.1\n' + bare, {"warp": -0.02})
+
+
+def test_calibrated_file_gets_the_loose_heights_and_nothing_else():
+    from fabmd.calibration import with_yarn_heights
+
+    new = with_yarn_heights(TINY, {"warp": 0.4123e-3})
+    data, old = tomllib.loads(new), tomllib.loads(TINY)
+    assert data["yarns"]["warp"]["height_m"] == "0.4123 mm"
+    data["yarns"]["warp"]["height_m"] = old["yarns"]["warp"]["height_m"]
+    assert data == old
+    assert [a for a, b in zip(TINY.splitlines(), new.splitlines(), strict=True) if a != b] \
+        == ['height_m = "0.5 mm"']  # in place
+    # a section sized by its packing: the packing goes, the height comes
+    packed = TINY.replace('height_m = "0.5 mm"\ncount_per_m = "5 ends/cm"',
+                          'fibre_volume_fraction = 0.5\ncount_per_m = "5 ends/cm"')
+    got = tomllib.loads(with_yarn_heights(packed, {"warp": 0.3e-3, "weft": 0.31e-3}))
+    assert "fibre_volume_fraction" not in got["yarns"]["warp"]
+    assert (got["yarns"]["warp"]["height_m"], got["yarns"]["weft"]["height_m"]) == (
+        "0.3 mm", "0.31 mm")
+    # an override table after the family's table is left alone
+    over = TINY.replace("[yarns.weft]", '[[yarns.warp.overrides]]\nyarns = [0]\n'
+                                        'height_m = "0.45 mm"\n\n[yarns.weft]')
+    got = tomllib.loads(with_yarn_heights(over, {"warp": 0.3e-3}))
+    assert got["yarns"]["warp"]["overrides"] == [{"yarns": [0], "height_m": "0.45 mm"}]
+    inline = TINY.replace('[yarns.weft]\n', 'yarns.weft.n_fibres = 1\n[yarns.weftx]\n')
+    with pytest.raises(InputError, match="no \\[yarns.weft\\] table of its own"):
+        with_yarn_heights(inline, {"weft": 0.3e-3})
+
+
+def test_new_loose_heights_give_the_law_the_new_fibre():
+    from fabmd.examples_dir import example_scene
+    from fabmd.scenefile import load_scene
+
+    scene = load_scene(example_scene("plain_weave.toml"))
+    lower = scene.with_yarn_heights({"warp": 0.55e-3, "weft": 0.55e-3})
+    assert (lower.fabric.warp.height_m, lower.fabric.weft.height_m) == (0.55e-3, 0.55e-3)
+    assert lower.fabric.warp.width_m == scene.fabric.warp.width_m
+    old, new = scene.contact.within_family_law, lower.contact.within_family_law
+    # the inscribed fibres of a lower section are thinner; the yarn's law is the same
+    assert new.diameter_m < 0.9 * old.diameter_m and new.law == old.law
+    assert scene.with_yarn_heights({}).contact == scene.contact
+    with pytest.raises(InputError, match="no families \\['binder'\\]"):
+        scene.with_yarn_heights({"binder": 1e-3})
 
 
 # ---- tiny LAMMPS runs -------------------------------------------------------------------
@@ -403,3 +451,37 @@ def test_thickness_under_a_pressure_from_a_compaction_summary():
             "contact_pressure_pa": 5769.0, "contact_thickness_m": 7.3461e-4}
     assert thickness_under(taut, 4140.0) == 7.3461e-4
     assert thickness_under(dict(curve, pressure_reached=False), 4140.0) is None
+
+
+@pytest.mark.lammps
+@pytest.mark.slow  # ~10-20 s: a tension search in every run, the final crimp's figures
+def test_crimp_and_tension_of_one_family_together_by_the_loose_height(tmp_path, capsys):
+    extra = ('\n[calibrate]\ncrimp_pct = { warp = 2.0, weft = 2.0 }\ntarget_tension = "1 N"\n'
+             'crimp_by = "loose_height"\nmax_runs = 10\n')
+    path = scene_file(tmp_path, extra)
+    out = tmp_path / "cal"
+    code, text, err = cli(capsys, "calibrate", str(path), "--out", str(out), "--np", "1",
+                          "--quiet")
+    assert code == 0, err
+    assert "reached (by the crimp's tension search)" in text
+    cal = json.loads((out / "calibration.json").read_text())
+    assert cal["reached"] and [k["acts_on"] for k in cal["knobs"]] == ["loose_height"] * 2
+    for fam in ("warp", "weft"):
+        assert cal["achieved"][f"crimp:{fam}"] == pytest.approx(2.0, abs=0.2)
+        assert cal["achieved"][f"tension:{fam}"] == pytest.approx(1.0, rel=0.05)
+    # the scene's 0.5 mm loose yarns crimp to ~3 % at 1 N: lower ones are needed
+    heights = cal["loose_height_m"]
+    assert 0.3e-3 < heights["warp"] < 0.5e-3 and 0.3e-3 < heights["weft"] < 0.5e-3
+    # along the runs, a lower loose section gave less crimp at the same tension
+    runs = [r for r in cal["runs"] if not r.get("failed")]
+    pairs = sorted((r["loose_height_m"]["warp"] + r["loose_height_m"]["weft"],
+                    r["achieved"]["crimp:warp"]) for r in runs)
+    assert pairs[0][1] < pairs[-1][1]
+    scene = tomllib.loads((out / "calibrated.toml").read_text())
+    assert scene["yarns"]["warp"]["height_m"] == f"{1e3 * heights['warp']:.6g} mm"
+    assert scene["crimp"]["expansion"] == cal["expansion"]
+    assert cal["expansion"]["warp"] < -0.01  # the tension search moved it
+    # the calibrated file crimps again to what was found
+    final = cal["final_crimp"]
+    assert final["crimp_pct"]["warp"] == pytest.approx(cal["achieved"]["crimp:warp"],
+                                                       abs=0.02)

@@ -83,11 +83,17 @@ def result_text(found) -> str:
     for knob in s["knobs"] + s["uncontrolled"]:
         got = s["achieved"][knob["name"]]
         status = "reached" if knob["verdict"] in ("reached", "met") else "NOT reached"
-        control = "" if knob in s["knobs"] else " (not controlled)"
-        lines.append(f"  {knob['name']:16s} target {_value(knob['name'], knob['target'])}, "
+        control = ("" if knob in s["knobs"] else
+                   " (by the crimp's tension search)" if knob.get("acts_on") == "crimp_search"
+                   else " (not controlled)")
+        tol = knob["tolerance"]
+        lines.append(f"  {knob['name']:16s} target {_value(knob['name'], knob['target'])} "
+                     f"± {_value(knob['name'], tol).replace(' %', ' pp')}, "
                      f"got {_value(knob['name'], got)}: {status}{control}")
     lines.append("  [crimp] expansion = { " + ", ".join(
         f"{f} = {v:+.5g}" for f, v in s["expansion"].items()) + " }")
+    for fam, height in sorted((s.get("loose_height_m") or {}).items()):
+        lines.append(f"  [yarns.{fam}] height_m = {1e3 * height:.6g} mm (loose section)")
     if found.final:
         lines.append(f"  calibrated.toml crimped again: thickness "
                      f"{1e3 * found.final['thickness_m']:.4f} mm, crimp " + ", ".join(

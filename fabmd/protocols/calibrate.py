@@ -19,6 +19,18 @@ target is measured and reported against its tolerance, never searched; the calib
 says so when it starts and in its result. Give ``thickness_families`` to free a family
 (e.g. ``["warp"]``: the warp shrink sets the thickness, the weft expansion its tension).
 
+**Crimp and tension of one family together** (``crimp_by = "loose_height"``): the crimp
+the crimp stage leaves at a given tension follows the loose section it starts from (the
+drawing's height: benchmarks/RESULTS.md "Periodic shear: drag and the yarns' stretch"),
+so each crimp target is served by its family's loose height h0·(1 + s) (width, tex and
+count kept; the cell is drawn again and the contact's law derived again for the new
+virtual fibre), and the tension by each run's crimp searching its own expansion
+(``[crimp] target_tension`` or ``[calibrate] target_tension``;
+:mod:`fabmd.protocols.crimp_tension`; the next run starts from the expansion found). A
+thickness target is then reported, not controlled. ``calibrated.toml`` gets the heights
+(``[yarns.<family>] height_m``, a ``fibre_volume_fraction`` there taken out) and the
+expansion.
+
 **Thickness at a pressure** (``at_pressure_pa``): each run's crimped cell is then put
 between two platens (:class:`~fabmd.protocols.compaction.Compaction`, the scene's
 ``[compaction]`` settings) that close until the mean pressure reaches ``at_pressure_pa``
@@ -62,13 +74,16 @@ from pathlib import Path
 
 from .. import inputs, schema
 from ..engine import Engine, mpi
-from ..errors import InputError, SimulationFailed
+from ..errors import CalibrationNotReached, InputError, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
 from ..scene.outputs import TrajectoryOutput
 from .calibrate_knobs import check_targets, default_thickness_families
 from .calibrate_search import CoupledSearch, Knob, next_strain
 from .crimp import Crimp, CrimpResult
+
+#: what may reach a family's crimp (``CrimpTargets.crimp_by``)
+CRIMP_BY = ("expansion", "loose_height")
 
 
 @dataclass(frozen=True)
@@ -94,6 +109,13 @@ class CrimpTargets:
         max_runs: crimp runs at most (>= 2; default 12).
         datasheet: where ``thickness_m`` is not given, take the datasheet's
             ``[fabric] thickness`` (and its pressure) as the target (scene files only).
+        crimp_by: what reaches a family's crimp: ``"expansion"`` (default: its
+            rest-length strain, which then serves nothing else) or ``"loose_height"``
+            (the height of its loose section, h0·(1 + s) with s in
+            :data:`~fabmd.protocols.calibrate_knobs.LOOSE_HEIGHT_RANGE`, width, tex and
+            count kept: the crimp the crimp stage gives follows the loose section), so
+            that crimp and tension of one family are reached together (the tension by
+            the expansion). Needs a scene (the cell is built again for each height).
     """
 
     thickness_m: float | None = field(default=None, metadata=schema.unit("length"))
@@ -107,6 +129,7 @@ class CrimpTargets:
     strain_range: tuple[float, float] | None = None
     max_runs: int = 12
     datasheet: bool = True
+    crimp_by: str = "expansion"
 
     def __post_init__(self):
         from .crimp_tension import check_target_tension
@@ -144,6 +167,12 @@ class CrimpTargets:
                                  f"-0.5 < lowest < highest < 0.5, got "
                                  f"{list(self.strain_range)!r}")
         inputs.positive_int("calibrate.max_runs", self.max_runs, minimum=2)
+        if self.crimp_by not in CRIMP_BY:
+            raise InputError(f"calibrate.crimp_by must be one of {', '.join(CRIMP_BY)}, "
+                             f"got {self.crimp_by!r}")
+        if self.crimp_by == "loose_height" and not self.crimp_pct:
+            raise InputError("calibrate.crimp_by = \"loose_height\" moves the loose "
+                             "height to reach a crimp: give calibrate.crimp_pct too")
         if self.thickness_m is None and not self.crimp_pct and self.target_tension is None:
             raise InputError("calibrate: nothing to calibrate: give thickness_m (optionally "
                              "at_pressure_pa), crimp_pct and/or target_tension (or a "
@@ -206,7 +235,9 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
               thickness_families: tuple[str, ...] | None = None, max_runs: int | None = None,
               out: Path | None = None, engine: Engine | None = None,
               overwrite: bool = False, compaction=None, on_run=None,
-              notes: list[str] | None = None) -> CalibrationResult:
+              notes: list[str] | None = None, cell_for=None,
+              loose_height_m: dict[str, float] | None = None,
+              loose_height_range: dict | None = None) -> CalibrationResult:
     """Find the crimp expansion that reaches ``targets`` on ``model`` (the loose cell).
 
     Args:
@@ -218,6 +249,14 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
             (default: its defaults); its pressures are set to that one, no unloading.
         on_run: called with each run's record (a dict) as soon as it is measured.
         notes: lines recorded in ``calibration.json`` (e.g. where the targets came from).
+        cell_for, loose_height_m, loose_height_range: with ``crimp_by =
+            "loose_height"``, the loose cell for given section heights
+            (``cell_for({family: height_m})`` → (BeadModel, the crimp's contact, a
+            compaction with the platens' contact), both derived again for the new
+            virtual fibre, which follows the section), the scene's heights h0 per
+            family [m] and the (lowest, highest) relative change that can be drawn per
+            family (default :data:`~fabmd.protocols.calibrate_knobs.LOOSE_HEIGHT_RANGE`);
+            ``model`` is then only checked against.
 
     Writes ``calibration.json`` in ``out`` (every run: strains, achieved values, wall
     time; the knobs, their samples and verdicts) whether the targets are reached or not.
@@ -234,19 +273,31 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
         raise InputError("[crimp] target_tension searches the expansion itself: for a "
                          "calibration give it as [calibrate] target_tension instead")
     base = dataclasses.replace(base, trajectory=TrajectoryOutput(frames=0))
+    if targets.crimp_by == "loose_height" and targets.target_tension is not None:
+        # each run's crimp searches its own expansion for the tension (crimp_tension)
+        base = dataclasses.replace(base, target_tension=targets.target_tension)
     engine = engine or Engine(progress=False)
     max_runs = inputs.positive_int("calibrate.max_runs", max_runs or targets.max_runs,
                                    minimum=2)
     fams = tuple(thickness_families or targets.thickness_families
                  or default_thickness_families(model))
     knobs, uncontrolled, measure = check_targets(model, targets, base, fams, compaction)
+    tall = [fam for kn in knobs if kn.acts_on == "loose_height" for fam in kn.families]
+    if tall and (cell_for is None or not set(tall) <= set(loose_height_m or {})):
+        raise InputError("calibrate.crimp_by = \"loose_height\" builds the cell again for "
+                         "each height: run it from a scene (fabmd calibrate SCENE, or "
+                         "fabmd.calibration.run_calibration)")
+    heights = (cell_for, loose_height_m) if tall else None
+    for knob in knobs:
+        if knob.acts_on == "loose_height" and knob.families[0] in (loose_height_range or {}):
+            knob.bounds = tuple(loose_height_range[knob.families[0]])
     root = prepare_run_folder(out, overwrite=overwrite, prefix="calibration")
     coupled = CoupledSearch(len(knobs))
     runs: list[dict] = []
     results: dict[int, CrimpResult] = {}
     for k in range(1, max_runs + 1):
         record, result = _trial(k, model, base, knobs, uncontrolled, measure, targets,
-                                root / f"run-{k:02d}", engine)
+                                root / f"run-{k:02d}", engine, heights)
         runs.append(record)
         if result is None:  # recorded; the search stops there
             _stop_after_failure(knobs, record)
@@ -254,6 +305,8 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                 on_run(record)
             break
         results[k] = result
+        if base.target_tension is not None:  # the next search starts where this one ended
+            base = dataclasses.replace(base, expansion=record["expansion"])
         _take_samples(knobs, record["achieved"], k, targets, Path(record["folder"]))
         if on_run is not None:
             on_run(record)
@@ -275,30 +328,41 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
 # -- the steps of one calibration (calibrate) -------------------------------------------
 def _trial(k: int, model: BeadModel, base: Crimp, knobs: list[Knob], uncontrolled: list[Knob],
            measure, targets: CrimpTargets, folder: Path,
-           engine: Engine) -> tuple[dict, CrimpResult | None]:
-    """Run ``k``: the crimp at the knobs' strains (and the compaction that measures the
-    thickness under pressure); its record and result, or a record of the failure and
-    None."""
+           engine: Engine, heights=None) -> tuple[dict, CrimpResult | None]:
+    """Run ``k``: the crimp at the knobs' strains (on the cell of the knobs' loose
+    heights, where ``heights`` = (cell_for, h0 per family) is given), and the compaction
+    that measures the thickness under pressure; its record and result, or a record of
+    the failure and None."""
     expansion = dict(base.expansion)
+    height_m: dict[str, float] = {}
     for knob in knobs:
         for fam in knob.families:
-            expansion[fam] = knob.value
+            if knob.acts_on == "loose_height":
+                height_m[fam] = heights[1][fam] * (1.0 + knob.value)
+            else:
+                expansion[fam] = knob.value
     t0 = time.perf_counter()
     crimp = dataclasses.replace(base, expansion=expansion)
     try:
-        result = crimp.run(model, out=folder / "crimp", engine=engine, figures=False)
+        cell, contact, compaction = _cell(model, heights, height_m)
+        if contact is not None:  # the contact of the new virtual fibre
+            crimp = dataclasses.replace(crimp, contact=contact)
+            measure = measure and dataclasses.replace(measure, contact=compaction.contact)
+        result = _crimped(crimp, cell, folder / "crimp", engine)
         crimp_wall = time.perf_counter() - t0
         pressed = None
         if measure is not None:
             pressed = measure.run(result.model, out=folder / "compaction", engine=engine)
-    except SimulationFailed as exc:
-        return {"run": k, "expansion": expansion,
+    except (SimulationFailed, CalibrationNotReached) as exc:  # (its tension search)
+        return {"run": k, "expansion": expansion, "loose_height_m": height_m,
                 "knobs": {kn.name: kn.value for kn in knobs},
                 "achieved": {kn.name: None for kn in knobs + uncontrolled},
                 "wall_s": time.perf_counter() - t0, "failed": str(exc),
                 "folder": str(folder)}, None
     achieved = _achieved(result, pressed, knobs + uncontrolled, targets)
-    record = {"run": k, "expansion": expansion,
+    if base.target_tension is not None:  # the expansion its tension search found
+        expansion = {**expansion, **result.summary["expansion"]}
+    record = {"run": k, "expansion": expansion, "loose_height_m": height_m,
               "knobs": {kn.name: kn.value for kn in knobs},
               "achieved": achieved,
               "error": {kn.name: (None if achieved[kn.name] is None
@@ -321,6 +385,39 @@ def _trial(k: int, model: BeadModel, base: Crimp, knobs: list[Knob], uncontrolle
         record["compaction_quasi_static"] = pressed.summary["quasi_static"]["ok"]
         record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
     return record, result
+
+
+def _crimped(crimp: Crimp, cell: BeadModel, folder: Path, engine: Engine) -> CrimpResult:
+    """The crimp of one run. Where it searches its own expansion for a tension and finds
+    no expansion that gives it (the tension jumps across the target), its closest run —
+    which its folder holds — is this run's result: the tension's verdict says how far
+    off it is, and the next run's heights may give a tension the search can reach."""
+    try:
+        return crimp.run(cell, out=folder, engine=engine, figures=False)
+    except CalibrationNotReached as exc:
+        if crimp.target_tension is None or exc.run_dir is None:
+            raise
+        import json
+
+        from .crimp import load_crimped
+
+        summary = mpi.bcast_json(json.loads((exc.run_dir / "summary.json").read_text())
+                                 if mpi.is_root() else None)
+        return CrimpResult(exc.run_dir, load_crimped(exc.run_dir), summary)
+
+
+def _cell(model: BeadModel, heights, height_m: dict[str, float]):
+    """The loose cell of this run and the contact of its crimp and compaction: ``model``
+    (contacts None: the stages' own), or what ``cell_for`` gives for ``height_m``; a
+    section that cannot be drawn at that height is this run's failure."""
+    if not height_m:
+        return model, None, None
+    try:
+        return heights[0](height_m)
+    except InputError as exc:
+        raise SimulationFailed(f"the loose cell with section heights "
+                               f"{ {f: round(h, 9) for f, h in height_m.items()} } m could "
+                               f"not be drawn: {exc}") from None
 
 
 def _stop_after_failure(knobs: list[Knob], record: dict) -> None:
@@ -380,7 +477,9 @@ def _conclude(knobs: list[Knob], uncontrolled: list[Knob], runs: list[dict], max
             knob.verdict = (f"{knob.name}: not reached within {max_runs} crimp runs "
                             f"(raise calibrate.max_runs); closest "
                             f"{knob.text(_closest(knob)[1])} at {_closest(knob)[0]:+.4f}")
-    best_run = min(runs, key=lambda r: _score(r, knobs))
+    # a tension reached by each run's own search counts in which run is the best
+    scored = knobs + [kn for kn in uncontrolled if kn.acts_on == "crimp_search"]
+    best_run = min(runs, key=lambda r: _score(r, scored))
     missed = [kn for kn in knobs if best_run["achieved"][kn.name] is None
               or not kn.converged(best_run["achieved"][kn.name])]
     controlled = not missed
@@ -389,6 +488,17 @@ def _conclude(knobs: list[Knob], uncontrolled: list[Knob], runs: list[dict], max
                for kn in missed]
     for kn in uncontrolled:
         q = best_run["achieved"][kn.name]
+        if kn.acts_on in ("crimp_search", "reported"):
+            kn.verdict = "met" if q is not None and kn.converged(q) else (
+                f"{kn.name}: {kn.text(q)} against {kn.text(kn.target)} ± "
+                f"{kn.text(kn.tolerance)}: " + (
+                    "the crimp stage's tension search did not reach it (see the run's "
+                    "crimp/summary.json tension_search)" if kn.acts_on == "crimp_search"
+                    else "reported, not controlled (the expansions serve the tension, the "
+                         "loose heights the crimp)"))
+            if kn.verdict != "met":
+                reasons.append(kn.verdict)
+            continue
         kn.verdict = "met" if q is not None and kn.converged(q) else (
             f"{kn.name}: not controlled (the {'+'.join(kn.families)} expansion serves "
             f"the thickness, thickness_families = {list(fams)}); it came out at "
@@ -402,8 +512,9 @@ def _conclude(knobs: list[Knob], uncontrolled: list[Knob], runs: list[dict], max
     return {
         "targets": _jsonable_targets(targets), "notes": list(notes or []),
         "reached": controlled and not reasons, "controlled_reached": controlled,
-        "reason": "; ".join(reasons),
+        "reason": "; ".join(dict.fromkeys(reasons)),  # coupled knobs share one
         "expansion": best_run["expansion"], "achieved": best_run["achieved"],
+        "loose_height_m": best_run.get("loose_height_m", {}),
         "best_run": best_run["run"], "last_run": runs[-1]["run"],
         "thickness_families": list(fams),
         "knobs": [kn.describe() for kn in knobs],

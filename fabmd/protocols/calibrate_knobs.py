@@ -14,6 +14,10 @@ from ..model.bead_model import BeadModel
 from ..results.measure import thickness_m
 from .calibrate_search import STRAIN_LIMIT, Knob, on_grid
 
+#: the relative change of a family's loose section height a crimp knob may try
+#: (``crimp_by = "loose_height"``): a half to one and a half times the scene's
+LOOSE_HEIGHT_RANGE = (-0.5, 0.5)
+
 if TYPE_CHECKING:
     from .calibrate import CrimpTargets
     from .crimp import Crimp
@@ -73,11 +77,14 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
     if unknown:
         raise InputError(f"calibrate names families {sorted(unknown)}; the fabric has "
                          f"{list(model.family_names)}")
+    by_height = targets.crimp_by == "loose_height"
     both = sorted(set(targets.crimp_pct) & set(tensions) - set(fams))
-    if both:
+    if both and not by_height:
         raise InputError(f"calibrate.crimp_pct and calibrate.target_tension both name "
                          f"{both}: a family's expansion is one number and serves one "
-                         f"target (the other follows from it); give one of them")
+                         f"target (the other follows from it); give one of them, or "
+                         f"reach the crimp by the loose height (calibrate.crimp_by = "
+                         f"\"loose_height\")")
     knobs: list[Knob] = []
     uncontrolled: list[Knob] = []
     if targets.thickness_m is not None:
@@ -90,11 +97,19 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
         bounds = _bounds(model, targets, fams, "thickness")
         start = min((base.expansion.get(f, 0.0) for f in fams), default=0.0)
         start = start if start < 0 else -0.03
-        knobs.append(Knob("thickness", "thickness", fams, targets.thickness_m,
-                          targets.thickness_tolerance * targets.thickness_m, +1, bounds,
-                          on_grid(min(max(start, bounds[0]), bounds[1]))))
+        knob = Knob("thickness", "thickness", fams, targets.thickness_m,
+                    targets.thickness_tolerance * targets.thickness_m, +1, bounds,
+                    on_grid(min(max(start, bounds[0]), bounds[1])))
+        if by_height and tensions:  # the expansions serve the tension search
+            knob.acts_on = "reported"
+        (uncontrolled if knob.acts_on == "reported" else knobs).append(knob)
     thickness_fams = set(fams) if targets.thickness_m is not None else set()
     for fam, crimp_target in targets.crimp_pct.items():
+        if by_height:  # the loose section, not the expansion: never taken by the thickness
+            knobs.append(Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
+                              targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE, 0.0,
+                              first_step=0.1, acts_on="loose_height"))
+            continue
         bounds = _bounds(model, targets, (fam,), "crimp")
         knob = Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
                     targets.crimp_tolerance_pct, +1, bounds,
@@ -102,6 +117,11 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
                     first_step=0.01)
         (uncontrolled if fam in thickness_fams else knobs).append(knob)
     for fam, newtons in sorted(tensions.items()):
+        if by_height:  # the crimp stage's own tension search reaches it in every run
+            uncontrolled.append(Knob(f"tension:{fam}", "tension", (fam,), newtons,
+                                     targets.tension_tolerance * newtons, -1, (-1.0, 1.0),
+                                     0.0, acts_on="crimp_search"))
+            continue
         bounds = _bounds(model, targets, (fam,), "tension")
         stiffness = yarn_axial_stiffness_n(model, fam)
         knob = Knob(f"tension:{fam}", "tension", (fam,), newtons,

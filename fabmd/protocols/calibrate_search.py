@@ -21,6 +21,11 @@ MIN_STRAIN_WIDTH = 2e-3
 #: 4× a 1 cN/tex weaving tension on glass, so a bracket that narrow is no jump — it is
 #: refined to a few grid steps (:data:`STRAIN_RESOLUTION`)
 MIN_TENSION_STRAIN_WIDTH = 4 * STRAIN_RESOLUTION
+#: the Newton step of :class:`CoupledSearch` on loose heights leaves out the directions
+#: whose sensitivity is below this fraction of the largest (truncated least squares): in a
+#: balanced weave the warp and weft loose heights move both crimps alike, and the small
+#: difference the runs measure is mostly the crimp's scatter (±0.03 % on the example)
+RCOND = 0.1
 
 
 @dataclass
@@ -29,7 +34,9 @@ class Knob:
 
     ``kind``: ``thickness`` [m], ``crimp`` [%] or ``tension`` [N per yarn]; ``sign``: +1
     when the quantity is expected to grow with the strain, −1 when it falls (the first
-    step only; the search then follows what it measures).
+    step only; the search then follows what it measures). ``acts_on``: ``expansion`` (the
+    strain is the families' rest-length strain α·ΔT) or ``loose_height`` (the strain is
+    the relative change of the families' loose section height, h = h0·(1 + strain)).
     """
 
     name: str
@@ -43,12 +50,19 @@ class Knob:
     first_step: float = 0.03
     samples: list = field(default_factory=list)  # (strain, quantity, other knobs' strains)
     verdict: str = ""  # "" searching, "reached", or why it stopped
+    acts_on: str = "expansion"
 
     @property
     def min_width(self) -> float:
         """Narrowest bracket or turn refined further [strain] (:data:`MIN_STRAIN_WIDTH`,
         :data:`MIN_TENSION_STRAIN_WIDTH` for a tension)."""
         return MIN_TENSION_STRAIN_WIDTH if self.kind == "tension" else MIN_STRAIN_WIDTH
+
+    @property
+    def max_step(self) -> float:
+        """Largest move of one Newton step (:class:`CoupledSearch`): 0.05 of strain; 0.15
+        of a loose height (the crimp moves about a tenth as much per unit of it)."""
+        return 0.15 if self.acts_on == "loose_height" else 0.05
 
     def error(self, q: float) -> float:
         return q - self.target
@@ -66,6 +80,7 @@ class Knob:
 
     def describe(self) -> dict:
         return {"name": self.name, "kind": self.kind, "families": list(self.families),
+                "acts_on": self.acts_on,
                 "target": self.target, "tolerance": self.tolerance,
                 "strain_range": list(self.bounds), "verdict": self.verdict,
                 "samples": [{"strain": s, "value": q} for s, q, _ in self.samples]}
@@ -110,7 +125,9 @@ class Seen:
 
     @property
     def tried(self) -> str:
-        return (f"strains {self.pts[0][0]:+.4f} to {self.pts[-1][0]:+.4f} tried on "
+        what = ("loose-height changes" if self.knob.acts_on == "loose_height"
+                else "strains")
+        return (f"{what} {self.pts[0][0]:+.4f} to {self.pts[-1][0]:+.4f} tried on "
                 f"{'+'.join(self.knob.families)}")
 
     @property
@@ -213,13 +230,19 @@ def _outwards(seen: Seen) -> tuple[float | None, str] | None:
                0.1)
     new = on_grid(min(max(s_best + outward * step, knob.bounds[0]), knob.bounds[1]))
     if new == s_best:
-        limit = "shrink" if outward < 0 else "expansion"
-        why = (" (a shrink beyond the loose crimp pulls the yarns straight: not a "
-               "woven state)" if outward < 0 and knob.kind != "tension" else "")
+        if knob.acts_on == "loose_height":
+            limit, why = "lowest" if outward < 0 else "highest", ""
+            limit += " loose-height"
+            advice = ("change the target (the loose height moves within "
+                      f"{knob.bounds[0]:+.2f} … {knob.bounds[1]:+.2f} of the scene's)")
+        else:
+            limit = "shrink" if outward < 0 else "expansion"
+            why = (" (a shrink beyond the loose crimp pulls the yarns straight: not a "
+                   "woven state)" if outward < 0 and knob.kind != "tension" else "")
+            advice = "widen calibrate.strain_range or change the target"
         return None, (f"{knob.name}: not reached at the {limit} limit {s_best:+.4f}{why}; "
                       f"{seen.best_text}; {seen.tried}, the quantity still moving towards "
-                      f"the target ({knob.text(q_j)} at {s_j:+.4f}): widen "
-                      f"calibrate.strain_range or change the target")
+                      f"the target ({knob.text(q_j)} at {s_j:+.4f}): {advice}")
     return new, ""
 
 
@@ -259,7 +282,8 @@ class CoupledSearch:
     """Several knobs whose quantities all move with every strain (the warp shrink sets the
     thickness, the weft's moves it too): each knob is first moved alone (its first step),
     which measures one column of the sensitivity J = d quantity / d strain (in tolerances
-    per unit strain); then Newton steps from the best run, J Δs = −e, at most 0.05 per knob,
+    per unit strain); then Newton steps from the best run, J Δs = −e, at most
+    :attr:`Knob.max_step` per knob (0.05 of strain, 0.15 of a loose height),
     halved after a step that made things worse; J is corrected after each step (Broyden).
     Brackets, turns and flat ranges are the one-knob search's (:func:`next_strain`)."""
 
@@ -311,8 +335,13 @@ class CoupledSearch:
         best = min(range(len(self.history)), key=lambda k: np.abs(self.history[k][1]).max())
         s_best, e_best = self.history[best]
         self.damping = 1.0 if best == len(self.history) - 1 else 0.5 * self.damping
-        ds, *_ = np.linalg.lstsq(self.jac, -e_best, rcond=None)
-        ds *= self.damping * min(1.0, 0.05 / max(float(np.abs(ds).max()), 1e-12))
+        # loose heights only: directions the runs hardly resolve (two heights that move
+        # both crimps alike) are not stepped along (strains with quantities in other units
+        # keep every direction: a stiff tension beside a thickness is no scatter)
+        rcond = RCOND if all(kn.acts_on == "loose_height" for kn in knobs) else None
+        ds, *_ = np.linalg.lstsq(self.jac, -e_best, rcond=rcond)
+        caps = np.array([kn.max_step for kn in knobs])
+        ds *= self.damping * min(1.0, float((caps / np.maximum(np.abs(ds), 1e-12)).min()))
         new = np.array([on_grid(min(max(s_best[k] + ds[k], kn.bounds[0]), kn.bounds[1]))
                         for k, kn in enumerate(knobs)])
         if np.abs(new - s_best).max() < 10 * STRAIN_RESOLUTION or self.damping < 1 / 16:
