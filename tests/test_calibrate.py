@@ -485,3 +485,24 @@ def test_crimp_and_tension_of_one_family_together_by_the_loose_height(tmp_path, 
     final = cal["final_crimp"]
     assert final["crimp_pct"]["warp"] == pytest.approx(cal["achieved"]["crimp:warp"],
                                                        abs=0.02)
+
+
+def test_heights_the_cell_cannot_be_drawn_at_step_halfway_back():
+    from fabmd.protocols.calibrate import _step_back
+
+    knobs = [Knob(f"crimp:{f}", "crimp", (f,), 1.5, 0.03, +1, (-0.5, 0.5), v,
+                  acts_on="loose_height") for f, v in (("warp", -0.4), ("weft", -0.08))]
+    runs = [{"run": 1, "knobs": {"crimp:warp": 0.0, "crimp:weft": 0.0},
+             "achieved": {"crimp:warp": 2.3, "crimp:weft": 2.8}},
+            {"run": 2, "knobs": {"crimp:warp": -0.25, "crimp:weft": -0.07},
+             "achieved": {"crimp:warp": 2.08, "crimp:weft": 2.39}},
+            {"run": 3, "knobs": {"crimp:warp": -0.4, "crimp:weft": -0.08},
+             "achieved": {"crimp:warp": None, "crimp:weft": None}, "failed": "overlap",
+             "undrawable": True}]
+    assert _step_back(knobs, runs)  # halfway from the failed step to the closest run (2)
+    assert [kn.value for kn in knobs] == [pytest.approx(-0.325), pytest.approx(-0.075)]
+    # nothing measured yet, or already within 1e-3 of the closest: the search stops
+    assert not _step_back(knobs, runs[2:])
+    for kn, v in zip(knobs, (-0.2505, -0.0705), strict=True):
+        kn.value = v
+    assert not _step_back(knobs, runs)

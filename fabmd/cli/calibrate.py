@@ -58,6 +58,8 @@ class Table:
         notes = [text for key, text in (("failed", "run failed"),
                                         ("pressure_note", "curve starts above the pressure"))
                  if record.get(key)]
+        if record.get("undrawable"):
+            notes = ["the loose cell cannot be drawn at these heights: half the step"]
         if record.get("compaction_quasi_static") is False:
             notes.append("compaction not quasi-static")
         print(f"{record['run']:3d}  " + "  ".join(f"{v:>24s}" for v in [strains] + values)

@@ -79,7 +79,7 @@ from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
 from ..scene.outputs import TrajectoryOutput
 from .calibrate_knobs import check_targets, default_thickness_families
-from .calibrate_search import CoupledSearch, Knob, next_strain
+from .calibrate_search import CoupledSearch, Knob, next_strain, on_grid
 from .crimp import Crimp, CrimpResult
 
 #: what may reach a family's crimp (``CrimpTargets.crimp_by``)
@@ -295,14 +295,21 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
     coupled = CoupledSearch(len(knobs))
     runs: list[dict] = []
     results: dict[int, CrimpResult] = {}
-    for k in range(1, max_runs + 1):
+    k = crimped = 0
+    while crimped < max_runs:  # runs whose cell could not be drawn cost nothing
+        k += 1
         record, result = _trial(k, model, base, knobs, uncontrolled, measure, targets,
                                 root / f"run-{k:02d}", engine, heights)
         runs.append(record)
+        crimped += not record.get("undrawable")
         if result is None:  # recorded; the search stops there
-            _stop_after_failure(knobs, record)
+            stepped_back = record.get("undrawable") and _step_back(knobs, runs)
+            if not stepped_back:
+                _stop_after_failure(knobs, record)
             if on_run is not None:
                 on_run(record)
+            if stepped_back:  # heights the cell cannot be drawn at: half the step
+                continue
             break
         results[k] = result
         if base.target_tension is not None:  # the next search starts where this one ended
@@ -358,6 +365,7 @@ def _trial(k: int, model: BeadModel, base: Crimp, knobs: list[Knob], uncontrolle
                 "knobs": {kn.name: kn.value for kn in knobs},
                 "achieved": {kn.name: None for kn in knobs + uncontrolled},
                 "wall_s": time.perf_counter() - t0, "failed": str(exc),
+                "undrawable": isinstance(exc, Undrawable),
                 "folder": str(folder)}, None
     achieved = _achieved(result, pressed, knobs + uncontrolled, targets)
     if base.target_tension is not None:  # the expansion its tension search found
@@ -385,6 +393,25 @@ def _trial(k: int, model: BeadModel, base: Crimp, knobs: list[Knob], uncontrolle
         record["compaction_quasi_static"] = pressed.summary["quasi_static"]["ok"]
         record["free_thickness_m"] = result.summary["crimped"]["thickness_m"]
     return record, result
+
+
+class Undrawable(SimulationFailed):
+    """A trial's loose cell cannot be drawn at its heights (no LAMMPS ran)."""
+
+
+def _step_back(knobs: list[Knob], runs: list[dict]) -> bool:
+    """After a run whose cell could not be drawn: each knob halfway back to the closest
+    run measured so far (False where none was, or the step is already under 1e-3)."""
+    done = [r for r in runs if not r.get("failed")]
+    if not done:
+        return False
+    best = min(done, key=lambda r: _score(r, knobs))["knobs"]
+    back = {kn.name: on_grid(0.5 * (kn.value + best[kn.name])) for kn in knobs}
+    if max(abs(back[kn.name] - kn.value) for kn in knobs) < 1e-3:
+        return False
+    for knob in knobs:
+        knob.value = back[knob.name]
+    return True
 
 
 def _crimped(crimp: Crimp, cell: BeadModel, folder: Path, engine: Engine) -> CrimpResult:
@@ -415,7 +442,7 @@ def _cell(model: BeadModel, heights, height_m: dict[str, float]):
     try:
         return heights[0](height_m)
     except InputError as exc:
-        raise SimulationFailed(f"the loose cell with section heights "
+        raise Undrawable(f"the loose cell with section heights "
                                f"{ {f: round(h, 9) for f, h in height_m.items()} } m could "
                                f"not be drawn: {exc}") from None
 
