@@ -256,3 +256,17 @@ def test_fabmd_test_refuses_an_unreachable_target_before_any_folder(tmp_path, te
     with pytest.raises(InputError, match="nothing to shrink"):
         run_test(load_scene(scene_file), test, tmp_path / "out")
     assert list(tmp_path.iterdir()) == [scene_file]
+
+
+def test_a_crimp_that_went_into_one_family_of_a_balanced_fabric_is_named():
+    from fabmd.protocols.crimp import crimp_interchange
+
+    loose = {"crimp_pct": {"warp": 2.75, "weft": 2.76}}
+    # the 19-fibre cell from loose yarns 0.84 mm high (benchmarks/RESULTS.md)
+    note = crimp_interchange(loose, {"crimp_pct": {"warp": 2.488, "weft": 0.886}})
+    assert note and "2.49 / 0.886 %" in note and "crimp_by = \"loose_height\"" in note
+    assert crimp_interchange(loose, {"crimp_pct": {"warp": 1.513, "weft": 1.525}}) is None
+    # drawn differently (an unbalanced fabric): its crimps may differ
+    assert crimp_interchange({"crimp_pct": {"warp": 2.0, "weft": 4.0}},
+                             {"crimp_pct": {"warp": 0.5, "weft": 3.0}}) is None
+    assert crimp_interchange({"crimp_pct": {"binder": 5.0}}, {"crimp_pct": {}}) is None

@@ -420,7 +420,7 @@ def _crimped(crimp: Crimp, cell: BeadModel, folder: Path, engine: Engine) -> Cri
     which its folder holds — is this run's result: the tension's verdict says how far
     off it is, and the next run's heights may give a tension the search can reach."""
     try:
-        return crimp.run(cell, out=folder, engine=engine, figures=False)
+        return crimp.run(cell, out=folder, engine=engine, figures=False, quiet=True)
     except CalibrationNotReached as exc:
         if crimp.target_tension is None or exc.run_dir is None:
             raise

@@ -269,7 +269,8 @@ class Crimp:
 
     # -- run ------------------------------------------------------------------------
     def run(self, model: BeadModel, out: Path | None = None, engine: Engine | None = None,
-            overwrite: bool = False, resume: bool = False, figures: bool = True) -> CrimpResult:
+            overwrite: bool = False, resume: bool = False, figures: bool = True,
+            quiet: bool = False) -> CrimpResult:
         """Crimp ``model`` (the loose fabric); returns the as-woven state and its measures.
 
         ``figures=False`` draws no ``sections.png``, ``cuts/`` and ``history.png`` (the
@@ -278,14 +279,18 @@ class Crimp:
         ``resume``: continue the interrupted crimp in ``out`` from its checkpoint. A shrink
         beyond a family's loose crimp is warned about (``UserWarning``) and listed in the
         summary's ``shrink_warnings``. With ``target_tension``, several crimp runs search
-        the expansion for it (not resumable: a resume starts the search again).
+        the expansion for it (not resumable: a resume starts the search again). A crimp
+        interchange (warp and weft drawn alike, crimped apart: :func:`crimp_interchange`)
+        is warned about and kept in the summary's ``crimp_interchange``; ``quiet``: not
+        warned (the runs of a search, which judges the outcome itself).
         """
         engine = engine or Engine()
         if self.target_tension is not None:
             from .crimp_tension import crimp_to_tension
 
             self.check_model(model)
-            return crimp_to_tension(self, model, out, engine=engine, overwrite=overwrite)
+            return crimp_to_tension(self, model, out, engine=engine, overwrite=overwrite,
+                                    quiet=quiet)
         shrink = self.shrink_warnings(model)
         if mpi.is_root():
             for message in shrink:
@@ -307,6 +312,9 @@ class Crimp:
                            shrink_warnings=shrink,
                            trajectory=trajectory.name if trajectory else None)
             write_json(run_dir / "summary.json", summary)
+            if summary["crimp_interchange"] and not quiet:
+                warnings.warn(f"crimp in {run_dir}: {summary['crimp_interchange']}",
+                              UserWarning, stacklevel=2)
         summary = mpi.bcast_json(summary)
         if crimped is None:
             crimped = load_crimped(run_dir)
@@ -413,7 +421,37 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
         # the tension the crimp leaves in the yarns (N per yarn, cN/tex), per family
         "yarn_tension": yarn_tension(crimped),
     }
+    summary["crimp_interchange"] = crimp_interchange(summary["loose"], summary["crimped"])
     return crimped, summary
+
+
+#: warp and weft drawn alike (loose crimps within this relative difference) that crimp
+#: to crimps this many times apart are reported as a crimp interchange
+INTERCHANGE_LOOSE_TOLERANCE = 0.05
+INTERCHANGE_RATIO = 1.5
+
+
+def crimp_interchange(loose: dict, crimped: dict) -> str | None:
+    """A note where warp and weft were drawn alike but the crimp went into one of them
+    (``fabric_measures`` of the loose and the crimped state), else None. The crimp stage
+    of a balanced fabric has more than one outcome (benchmarks/RESULTS.md "Crimp pinned by
+    the loose height": nineteen fibres from loose yarns 5 % higher or lower than 0.8 mm
+    crimped to about 2.3 % warp / 0.9 % weft instead of 1.5 / 1.5 %), and the forces
+    follow the outcome."""
+    c0, c1 = loose.get("crimp_pct") or {}, crimped.get("crimp_pct") or {}
+    if not all(isinstance(d.get(f), int | float) for d in (c0, c1) for f in ("warp", "weft")):
+        return None
+    lo, hi = sorted((c0["warp"], c0["weft"]))
+    a, b = sorted((c1["warp"], c1["weft"]))
+    if hi <= 0 or hi - lo > INTERCHANGE_LOOSE_TOLERANCE * hi or a * INTERCHANGE_RATIO >= b:
+        return None
+    return (f"warp and weft were drawn alike (loose crimp {c0['warp']:.3g} / "
+            f"{c0['weft']:.3g} %) but crimped to {c1['warp']:.3g} / {c1['weft']:.3g} %: the "
+            f"crimp went into one family (crimp interchange, one of the crimp stage's "
+            f"outcomes for a balanced fabric; a slightly different loose height can give the "
+            f"other). If the fabric is balanced, give both crimps as targets: fabmd "
+            f"calibrate with [calibrate] crimp_pct = {{ warp = ..., weft = ... }} and "
+            f"crimp_by = \"loose_height\"")
 
 
 def _figures(run_dir: Path, crimped: BeadModel, raw, history: dict, end, final_ke: float,

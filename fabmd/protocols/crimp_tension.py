@@ -110,7 +110,8 @@ MIN_BRACKET = 2 * STRAIN_RESOLUTION
 
 
 def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
-                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 16):
+                     overwrite: bool = False, tolerance: float = 0.05, max_runs: int = 16,
+                     quiet: bool = False):
     """Run ``crimp`` (a :class:`~fabmd.protocols.crimp.Crimp` with ``target_tension``)
     until each family's mean yarn tension is within ``tolerance`` of its target (module
     docstring).
@@ -131,7 +132,8 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     refused: list[str] = []
     for run in range(max_runs):
         stage = _stage(crimp, fams, expansion)
-        result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0)
+        result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0,
+                           quiet=True)
         got = {f: result.summary["yarn_tension"][f]["yarn_n"] for f in fams}
         error = max(abs(got[f] / targets[f] - 1) for f in fams)
         tried.append({"expansion": dict(expansion), "yarn_tension_n": got,
@@ -167,10 +169,13 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
         # rerun the closest, so that the folder holds it
         closest = next(t for t in tried if t["largest_relative_error"] == error)
         result = _stage(crimp, fams, closest["expansion"]).run(model, out, engine=engine,
-                                                              overwrite=True)
+                                                              overwrite=True, quiet=True)
     result.summary["tension_search"] = search
     if mpi.is_root():
         write_json(Path(result.run_dir) / "summary.json", result.summary)
+        if result.summary.get("crimp_interchange") and not quiet:
+            warnings.warn(f"crimp in {result.run_dir}: {result.summary['crimp_interchange']}",
+                          UserWarning, stacklevel=3)
     if refused:
         raise CalibrationNotReached(f"crimp: {search['reason']} (the crimp folder holds "
                                     f"the closest run, {100 * error:.1f} % off)",
