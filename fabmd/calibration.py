@@ -205,6 +205,8 @@ def _final_crimp(calibrated: Path, folder: Path, engine: Engine, preset: str,
 
 
 # ---- the scene file with new loose heights and a new [crimp] expansion ------------------
+_HEADER = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\s\"']+?)\s*\]\s*(#.*)?$")
+_EXPANSION = re.compile(r"^(\s*)expansion\s*=")
 _HEIGHT = re.compile(r"^(\s*)(height_m|fibre_volume_fraction)\s*=")
 
 
@@ -244,18 +246,19 @@ def with_yarn_heights(text: str, heights_m: dict[str, float], where: str = "scen
                  if k not in ("height_m", "fibre_volume_fraction")}
         wanted["yarns"][fam] = {**table, "height_m": _mm(height)}
     new = "".join(lines)
-    try:
-        got = tomllib.loads(new)
-    except tomllib.TOMLDecodeError as exc:
-        got = {"error": str(exc)}
-    if got != wanted:
+    if not _reads_back(new, wanted):
         raise InputError(f"{where}: cannot write the calibrated loose heights into this file "
                          f"without changing something else (a dotted or inline yarn "
                          f"table?); write each [yarns.<family>] as a table of its own")
     return new
 
-_HEADER = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\s\"']+?)\s*\]\s*(#.*)?$")
-_EXPANSION = re.compile(r"^(\s*)expansion\s*=")
+
+def _reads_back(text: str, wanted: dict) -> bool:
+    """Whether the edited scene file ``text`` parses to ``wanted`` (nothing else changed)."""
+    try:
+        return tomllib.loads(text) == wanted
+    except tomllib.TOMLDecodeError:
+        return False
 
 
 def _number(value: float) -> str:
@@ -304,11 +307,7 @@ def with_expansion(text: str, expansion: dict[str, float], where: str = "scene",
         lines += ["\n", "[crimp]\n", f"expansion = {inline}{comment}"]
     new = header + "".join(lines)
     wanted = dict(data, crimp=dict(crimp, expansion=new_expansion))
-    try:
-        got = tomllib.loads(new)
-    except tomllib.TOMLDecodeError as exc:
-        got = {"error": str(exc)}
-    if got != wanted:
+    if not _reads_back(new, wanted):
         raise InputError(f"{where}: cannot write the calibrated [crimp] expansion into this "
                          f"file without changing something else (a dotted or inline form?); "
                          f"write [crimp] expansion = {{ ... }} as one line")

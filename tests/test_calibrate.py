@@ -61,6 +61,16 @@ def cli(capsys, *argv):
     return code, out.out, out.err
 
 
+def calibrated(tmp_path, capsys, extra: str):
+    """``fabmd calibrate`` on TINY + ``extra``, which must reach its targets: (out folder,
+    terminal text, calibration.json)."""
+    out = tmp_path / "cal"
+    code, text, err = cli(capsys, "calibrate", str(scene_file(tmp_path, extra)), "--out",
+                          str(out), "--np", "1", "--quiet")
+    assert code == 0, err
+    return out, text, json.loads((out / "calibration.json").read_text())
+
+
 # ---- the search, on closed-form responses (no LAMMPS) ----------------------------------
 def drive(knob: Knob, response, runs: int = 12) -> tuple[int, str]:
     """Run the search on ``response(strain)``; (runs used, why it stopped or "")."""
@@ -458,13 +468,8 @@ def test_thickness_under_a_pressure_from_a_compaction_summary():
 def test_crimp_and_tension_of_one_family_together_by_the_loose_height(tmp_path, capsys):
     extra = ('\n[calibrate]\ncrimp_pct = { warp = 2.0, weft = 2.0 }\ntarget_tension = "1 N"\n'
              'crimp_by = "loose_height"\nmax_runs = 10\n')
-    path = scene_file(tmp_path, extra)
-    out = tmp_path / "cal"
-    code, text, err = cli(capsys, "calibrate", str(path), "--out", str(out), "--np", "1",
-                          "--quiet")
-    assert code == 0, err
+    out, text, cal = calibrated(tmp_path, capsys, extra)
     assert "reached (by the crimp's tension search)" in text
-    cal = json.loads((out / "calibration.json").read_text())
     assert cal["reached"] and [k["acts_on"] for k in cal["knobs"]] == ["loose_height"] * 2
     for fam in ("warp", "weft"):
         assert cal["achieved"][f"crimp:{fam}"] == pytest.approx(2.0, abs=0.2)
