@@ -435,9 +435,9 @@ def crimp_interchange(loose: dict, crimped: dict) -> str | None:
     """A note where warp and weft were drawn alike but the crimp went into one of them
     (``fabric_measures`` of the loose and the crimped state), else None. The crimp stage
     of a balanced fabric has more than one outcome (benchmarks/RESULTS.md "Crimp pinned by
-    the loose height": nineteen fibres from loose yarns 5 % higher or lower than 0.8 mm
-    crimped to about 2.3 % warp / 0.9 % weft instead of 1.5 / 1.5 %), and the forces
-    follow the outcome."""
+    the loose height": nineteen area-packed fibres crimped to 1.05 % warp / 2.10 % weft
+    from loose yarns 0.8 mm high and to 2.49 / 0.89 % from 0.84 mm), and the forces follow
+    the outcome."""
     c0, c1 = loose.get("crimp_pct") or {}, crimped.get("crimp_pct") or {}
     if not all(isinstance(d.get(f), int | float) for d in (c0, c1) for f in ("warp", "weft")):
         return None
