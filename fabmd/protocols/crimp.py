@@ -312,9 +312,8 @@ class Crimp:
                            shrink_warnings=shrink,
                            trajectory=trajectory.name if trajectory else None)
             write_json(run_dir / "summary.json", summary)
-            if summary["crimp_interchange"] and not quiet:
-                warnings.warn(f"crimp in {run_dir}: {summary['crimp_interchange']}",
-                              UserWarning, stacklevel=2)
+            if not quiet:
+                warn_interchange(run_dir, summary, stacklevel=3)
         summary = mpi.bcast_json(summary)
         if crimped is None:
             crimped = load_crimped(run_dir)
@@ -429,6 +428,13 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
 #: to crimps this many times apart are reported as a crimp interchange
 INTERCHANGE_LOOSE_TOLERANCE = 0.05
 INTERCHANGE_RATIO = 1.5
+
+
+def warn_interchange(run_dir: Path, summary: dict, stacklevel: int = 2) -> None:
+    """Warn (``UserWarning``) where a crimp summary names a crimp interchange."""
+    if summary.get("crimp_interchange"):
+        warnings.warn(f"crimp in {run_dir}: {summary['crimp_interchange']}", UserWarning,
+                      stacklevel=stacklevel + 1)
 
 
 def crimp_interchange(loose: dict, crimped: dict) -> str | None:

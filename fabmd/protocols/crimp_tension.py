@@ -173,9 +173,10 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     result.summary["tension_search"] = search
     if mpi.is_root():
         write_json(Path(result.run_dir) / "summary.json", result.summary)
-        if result.summary.get("crimp_interchange") and not quiet:
-            warnings.warn(f"crimp in {result.run_dir}: {result.summary['crimp_interchange']}",
-                          UserWarning, stacklevel=3)
+        if not quiet:
+            from .crimp import warn_interchange
+
+            warn_interchange(result.run_dir, result.summary, stacklevel=4)
     if refused:
         raise CalibrationNotReached(f"crimp: {search['reason']} (the crimp folder holds "
                                     f"the closest run, {100 * error:.1f} % off)",
