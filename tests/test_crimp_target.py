@@ -259,7 +259,7 @@ def test_fabmd_test_refuses_an_unreachable_target_before_any_folder(tmp_path, te
 
 
 def test_a_crimp_that_went_into_one_family_of_a_balanced_fabric_is_named():
-    from fabmd.protocols.crimp import crimp_interchange
+    from fabmd.protocols.crimp_balance import crimp_interchange
 
     loose = {"crimp_pct": {"warp": 2.75, "weft": 2.76}}
     # the 19-fibre cell from loose yarns 0.84 mm high (benchmarks/RESULTS.md)

@@ -174,7 +174,7 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     if mpi.is_root():
         write_json(Path(result.run_dir) / "summary.json", result.summary)
         if not quiet:
-            from .crimp import warn_interchange
+            from .crimp_balance import warn_interchange
 
             warn_interchange(result.run_dir, result.summary, stacklevel=4)
     if refused:
