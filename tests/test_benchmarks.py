@@ -1,5 +1,6 @@
 """The trajectory-cost benchmark runs (tiny) and edits inputs as it says."""
 
+import dataclasses
 import importlib.util
 import json
 from pathlib import Path
@@ -63,11 +64,23 @@ def test_accuracy_configuration_keeps_the_fabric_and_the_physical_speed():
     assert scene.fabric.warp.spacing_m == base.fabric.warp.spacing_m
     assert scene.discretisation.spacing_ratio == 0.25
     assert scene.discretisation.mass_scaling == 100.0
-    # mass scaling lowers the wave speed by sqrt(m): the fraction grows by sqrt(m)
-    assert scene.protocols["tension"]["speed_fraction"] == pytest.approx(1e-4 * 0.5 * 10)
-    assert scene.protocols["picture_frame"]["speed_fraction"] == pytest.approx(2e-3 * 0.5 * 10)
+    # the example's own speeds: from its file (the test's default where it sets none)
+    from fabmd.pipeline import build_protocol
+
+    speeds = bench.base_speeds(base)
+    for name in ("tension", "picture_frame"):
+        own = base.protocols[name].get("speed_fraction")
+        assert speeds[name] == (own if own is not None
+                                else build_protocol(name.replace("_", "-")).speed_fraction)
+        # mass scaling lowers the wave speed by sqrt(m): the fraction grows by sqrt(m)
+        assert scene.protocols[name]["speed_fraction"] == pytest.approx(speeds[name] * 0.5 * 10)
+    without = dataclasses.replace(base, protocols={k: {kk: vv for kk, vv in v.items()
+                                                       if kk != "speed_fraction"}
+                                                   for k, v in base.protocols.items()})
+    assert bench.base_speeds(without)["tension"] == build_protocol("tension").speed_fraction
     assert scene.protocols["tension"]["coupon"] == {"cells": list(bench.TENSION_CELLS)}
-    assert base.protocols["tension"].get("speed_fraction") is None  # base untouched
+    # the base is untouched
+    assert base.protocols["tension"]["coupon"] != scene.protocols["tension"]["coupon"]
 
 
 def test_accuracy_errors_and_pareto_front():
@@ -89,6 +102,36 @@ def test_accuracy_errors_and_pareto_front():
     assert e["combined"] == 1.0
     points = [("a", 1.0, 0.5), ("b", 2.0, 0.6), ("c", 3.0, 0.1), ("d", 0.5, 0.9)]
     assert bench.pareto_front(points) == ["d", "a", "c"]
+
+
+def test_presets_errors_are_taken_past_the_toe_and_at_the_frame_angles():
+    """The presets table judges tension by F at 4/5/6 % only (not the toe) and the frame
+    by F_norm at 10-40 deg and the locking angle; the locking column is in degrees."""
+    bench = load_benchmark("presets")
+    curve = {"x": [0.0, 1.0], "y": [0.0, 1.0]}
+
+    def record(label, toe, past, frame, lock, wall):
+        return {"label": label, "wall_s": wall,
+                "crimp": {"beads": 100, "crimp_pct": 2.0},
+                "tension": {"values": {**{f"F{s}%": toe for s in (1, 2, 3)},
+                                       **{f"F{s}%": past for s in (4, 5, 6)},
+                                       "stiffness": toe}, "curve": curve},
+                "picture_frame": {"values": {**{f"F{a}°": frame for a in (10, 20, 30, 40)},
+                                             "locking": lock}, "curve": curve}}
+
+    configs = bench.configs()
+    assert list(configs) == ["fast", "default", "accurate", "reference"]
+    data = {"records": [record(configs["default"].label, 2.0, 110.0, 1.0, 30.0, 10.0),
+                        record(configs["reference"].label, 1.0, 100.0, 1.0, 32.0, 40.0)],
+            "base_speed": {"tension": 1e-4, "picture_frame": 1e-3}}
+    rows, errors = bench.rows(data)
+    assert [r[0] for r in rows] == ["default"]
+    # the toe's +100 % is shown, not judged; past it +10 %
+    assert errors["default"]["tension"]["combined"] == pytest.approx(0.1)
+    assert errors["default"]["picture_frame"]["combined"] == pytest.approx(2 / 32)
+    assert rows[0][8] == "-2.0"  # locking, degrees
+    assert "+100.0 / +100.0 / +10.0 / +10.0 / +10.0" in rows[0][6]
+    assert "Reference **N19 s/d 0.5 v×0.5**" in bench.section(data)
 
 
 def load_convergence():
