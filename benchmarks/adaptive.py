@@ -122,9 +122,9 @@ def run_one(test_obj, coupon, out: Path, engine: Engine, test: str, reuse: bool,
     if reuse and saved.is_file():
         run = json.loads(saved.read_text())
         run["curve"] = {k: np.asarray(v) for k, v in run["curve"].items()}
-        if "trusted" not in run and (out / "summary.json").is_file():  # older bench.json
-            run["trusted"] = json.loads((out / "summary.json").read_text())[
-                "quasi_static"].get("trusted")
+        if "partly" not in run and (out / "summary.json").is_file():  # older bench.json
+            verdict = json.loads((out / "summary.json").read_text())["quasi_static"]
+            run["trusted"], run["partly"] = verdict.get("trusted"), verdict.get("partly")
         return run
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -141,6 +141,7 @@ def run_one(test_obj, coupon, out: Path, engine: Engine, test: str, reuse: bool,
            "values": report_values(result.curve, test, xs),
            "mean_factor": adaptive["mean_speed_factor_after_start"] if adaptive else 1.0,
            "ok": s["quasi_static"]["ok"], "trusted": s["quasi_static"].get("trusted"),
+           "partly": s["quasi_static"].get("partly"),
            "beads": s["n_beads"],
            "load": os.getloadavg()[0]}
     saved.write_text(json.dumps(run))
@@ -160,12 +161,15 @@ def pct(value: float | None) -> str:
 
 
 def verdict_text(run: dict) -> str:
-    """fabmd's per-interval verdict: yes, or no with the trusted ranges of the x axis."""
+    """fabmd's verdict: yes; no with the trusted ranges of the x axis where fabmd trusts
+    part of the curve; "no (whole curve rejected)" where a whole-run measure failed (the
+    intervals it would otherwise trust in brackets)."""
     if run["ok"]:
         return "yes"
-    trusted = run.get("trusted") or []
-    return "no" + (" (trusted " + ", ".join(f"{a:.3g}–{b:.3g}" for a, b in trusted) + ")"
-                   if trusted else "")
+    ranges = ", ".join(f"{a:.3g}–{b:.3g}" for a, b in run.get("trusted") or [])
+    if run.get("partly") is False:
+        return "no (whole curve rejected" + (f"; intervals {ranges}" if ranges else "") + ")"
+    return "no" + (f" (trusted {ranges})" if ranges else "")
 
 
 def values_text(run: dict) -> str:

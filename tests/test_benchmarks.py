@@ -501,3 +501,14 @@ def test_periodic_energy_splits_each_interval_of_the_work(tmp_path, capsys):
         ",".join(repr(float(c[i])) for c in cols.values()) for i in range(len(g))) + "\n")
     row = bench.interval_split(bench.read_curve(tmp_path / "ps"))[2]
     assert np.isnan(row["contacts"]) and row["rest"] == pytest.approx(25e-6)
+
+
+def test_adaptive_verdict_says_when_the_whole_curve_is_rejected():
+    """A whole-run measure that failed (fabmd: "do not use the curve") is not shown as a
+    trusted range: the benchmark's table hid it once (stop 31)."""
+    bench = load_benchmark("adaptive")
+    assert bench.verdict_text({"ok": True}) == "yes"
+    assert bench.verdict_text({"ok": False, "trusted": [[2.5, 6.0]], "partly": True}) == \
+        "no (trusted 2.5–6)"
+    assert bench.verdict_text({"ok": False, "trusted": [[2.75, 6.0]], "partly": False}) == \
+        "no (whole curve rejected; intervals 2.75–6)"
