@@ -58,8 +58,8 @@ from _results import machine, table, update_section  # noqa: E402
 from fabmd.engine import Engine  # noqa: E402
 from fabmd.errors import CalibrationNotReached, OverlapWarning  # noqa: E402
 from fabmd.examples_dir import example_scene  # noqa: E402
-from fabmd.pipeline import build_protocol, run_crimp, run_test  # noqa: E402
-from fabmd.presets import PRESETS  # noqa: E402
+from fabmd.pipeline import run_crimp, run_test  # noqa: E402
+from fabmd.presets import PRESETS, speed_fraction  # noqa: E402
 from fabmd.results.curves import curve_difference  # noqa: E402
 from fabmd.results.folder import read_csv  # noqa: E402
 from fabmd.scenefile import Scene, load_scene  # noqa: E402
@@ -144,13 +144,8 @@ class Config:
 
 def base_speeds(base: Scene) -> dict[str, float]:
     """The scene's own loading speed of each test (its ``speed_fraction``, else the
-    test's default)."""
-    out = {}
-    for name in TESTS:
-        speed = base.protocols.get(name, {}).get("speed_fraction")
-        out[name] = float(speed if speed is not None
-                          else build_protocol(name.replace("_", "-")).speed_fraction)
-    return out
+    test's default: :func:`fabmd.presets.speed_fraction`)."""
+    return {name: speed_fraction(base, name) for name in TESTS}
 
 
 def preset_config(name: str) -> Config:

@@ -83,6 +83,21 @@ def _moves(scene: Scene, preset: Preset) -> bool:
     return then * preset.direction > now * preset.direction
 
 
+def speed_fraction(scene: Scene, table: str) -> float | None:
+    """The loading speed test ``table`` (``"tension"``, ``"picture_frame"``, ...) runs
+    ``scene`` at: its ``speed_fraction`` there, else the test's default (None where this
+    install has no such test)."""
+    current = scene.protocols.get(table, {}).get("speed_fraction")
+    if current is not None:
+        return float(current)
+    from .pipeline import build_protocol
+
+    try:
+        return float(build_protocol(table.replace("_", "-")).speed_fraction)
+    except InputError:
+        return None
+
+
 def apply_preset(scene: Scene, name: str) -> Scene:
     """``scene`` as preset ``name`` runs it."""
     if name not in PRESETS:
@@ -94,16 +109,10 @@ def apply_preset(scene: Scene, name: str) -> Scene:
     scene = scene.rediscretised(preset.n_fibres, preset.spacing_ratio)
     protocols = {k: dict(v) for k, v in scene.protocols.items()}
     if preset.speed_factor != 1.0:
-        from .pipeline import build_protocol
-
         for table in DRIVEN_TABLES:
-            test = table.replace("_", "-")
-            current = protocols.get(table, {}).get("speed_fraction")
-            if current is None:
-                try:
-                    current = build_protocol(test).speed_fraction
-                except InputError:  # a test this install does not have
-                    continue
+            current = speed_fraction(scene, table)
+            if current is None:  # a test this install does not have
+                continue
             protocols.setdefault(table, {})["speed_fraction"] = current * preset.speed_factor
     title = f"{scene.title} [{name}]" if name != "default" else scene.title
     return dataclasses.replace(scene, protocols=protocols, title=title)
