@@ -28,6 +28,7 @@ from pathlib import Path
 
 from .engine import Engine, mpi
 from .errors import CalibrationNotReached, InputError, RunInterrupted
+from .loose_height import drawn, loose_heights
 from .preflight import check_scene
 from .protocols.calibrate import CalibrationResult, calibrate, targets_from_scene
 from .protocols.calibrate_knobs import check_targets, default_thickness_families
@@ -65,6 +66,11 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     """
     where = scene.source or "scene"
     check_scene(scene)
+    if crimp_stage(scene).pins_crimp:
+        raise InputError(f"{where}: [crimp] crimp_by = \"loose_height\" reaches the stated "
+                         f"crimp at the weaving tension in the crimp stage itself (fabmd "
+                         f"crimp / fabmd test): nothing to calibrate; for other targets "
+                         f"take target_crimp_pct and crimp_by out of [crimp]")
     targets, notes = targets_from_scene(scene, settings)
     base = crimp_stage(scene)
     if (base.target_tension is not None and targets.crimp_by == "loose_height"
@@ -95,7 +101,7 @@ def run_calibration(scene: Scene, out: Path, engine: Engine | None = None,
     try:
         result = calibrate(cell, targets, base=base, out=work, engine=trial_engine,
                            compaction=compaction, on_run=on_run, notes=notes,
-                           cell_for=lambda h: _drawn(scene.with_yarn_heights(h)),
+                           cell_for=lambda h: drawn(scene.with_yarn_heights(h)),
                            loose_height_m=tall, loose_height_range=tall_range)
         calibrated = final = None
         if result.controlled_reached and text is not None:
@@ -140,48 +146,15 @@ def _mm(height_m: float) -> str:
 
 def _loose_heights(scene: Scene, targets, text: str | None,
                    where: str) -> tuple[dict | None, dict | None]:
-    """With ``crimp_by = "loose_height"``: the scene's loose section height per family
-    whose crimp is a target [m] and the range of relative changes (within
-    :data:`~fabmd.protocols.calibrate_knobs.LOOSE_HEIGHT_RANGE`, on a 0.05 grid) at which
-    the section can be drawn, after checking (before LAMMPS) that the heights can be
+    """With ``crimp_by = "loose_height"``: :func:`fabmd.loose_height.loose_heights` of the
+    crimp targets' families, after checking (before LAMMPS) that the heights can be
     written back into the file; (None, None) otherwise."""
     if targets.crimp_by != "loose_height":
         return None, None
-    from .protocols.calibrate_knobs import LOOSE_HEIGHT_RANGE
-
-    specs = scene.fabric.specs()
-    h0 = {fam: float(specs[fam].height_m) for fam in targets.crimp_pct if fam in specs}
-    scene.with_yarn_heights(h0)  # overrides are refused here
-    ranges = {}
-    for fam, h in h0.items():
-        lo, hi = LOOSE_HEIGHT_RANGE
-        steps = [round(lo + 0.05 * k, 2) for k in range(int(round((hi - lo) / 0.05)) + 1)]
-        drawable = [s for s in steps if _drawable(scene, {fam: h * (1 + s)})]
-        if not drawable or drawable[0] > 0 or drawable[-1] < 0:
-            raise InputError(f"{where}: the {fam} yarns' loose section cannot be drawn "
-                             f"much lower or higher than {_mm(h)} (tried {lo:+.2f} … "
-                             f"{hi:+.2f} of it), so the loose height cannot reach a crimp")
-        ranges[fam] = (drawable[0], drawable[-1])
+    h0, ranges = loose_heights(scene, targets.crimp_pct, where)
     if text is not None:
         with_yarn_heights(text, h0, where)
     return h0, ranges
-
-
-def _drawn(scene: Scene):
-    """The loose periodic cell of ``scene``, its crimp's contact and its compaction (for
-    the contact of the platens' run): what one loose-height trial needs."""
-    return (periodic_cell(scene), crimp_stage(scene).contact,
-            protocol_stage(scene, "compaction"))
-
-
-def _drawable(scene: Scene, heights_m: dict[str, float]) -> bool:
-    """Whether the fabric can be drawn with these loose heights (the section holds the
-    filaments below the packing limit, a racetrack is no taller than wide...)."""
-    try:
-        scene.with_yarn_heights(heights_m)
-    except InputError:
-        return False
-    return True
 
 
 def _final_crimp(calibrated: Path, folder: Path, engine: Engine, preset: str,

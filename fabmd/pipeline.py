@@ -3,6 +3,9 @@
 A results folder of ``fabmd test NAME SCENE.toml --out DIR`` holds one folder
 per stage::
 
+    DIR/loose_height/  with ``[crimp] crimp_by = "loose_height"``: the search of the loose
+                  sections that reach the stated crimp at the weaving tension
+                  (:func:`fabmd.loose_height.pin_crimp`; ``pinned_crimp.json``)
     DIR/crimp/    the as-woven state (crimped.data + crimped.json, sections.png, ...)
     DIR/coupon/   the coupon cut (or tiled) from it and relaxed free (coupon.data)
     DIR/NAME/     the test: curve.csv, summary.json, curve.png, the LAMMPS run
@@ -16,12 +19,14 @@ the crimped fabric as described instead (its edge zone excluded).
 from __future__ import annotations
 
 import dataclasses
+import json
 import shutil
 from pathlib import Path
 
 from .engine import Engine, interrupt, mpi
 from .engine.checkpoint import has_checkpoint
 from .errors import InputError, NotQuasiStatic, RunInterrupted
+from .loose_height import PINNED, pin_crimp, pinned_scene
 from .preflight import check_scene, check_test, plan_test
 from .protocols.coupon import CouponResult, load_coupon
 from .protocols.crimp import CrimpResult, load_crimped
@@ -50,6 +55,9 @@ from .stages import (  # noqa: F401
     section,
 )
 
+#: the folder of a test run where the loose heights are searched (crimp_by = "loose_height")
+LOOSE_HEIGHT = "loose_height"
+
 
 def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
               overwrite: bool = False, form: str = "fabric") -> CrimpResult:
@@ -61,11 +69,28 @@ def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
     crimp = crimp_stage(scene)
     crimp.check_model(loose)  # families and target crimps against this fabric: no folder yet
     if out is None:
+        if crimp.pins_crimp:  # the search's runs go to a temporary folder
+            scene, _ = pin_crimp(scene, prepare_run_folder(None, prefix="loose-height"),
+                                 engine)
+            loose = scene.model() if form == "fabric" else periodic_cell(scene)
+            crimp = crimp_stage(scene)
         return crimp.run(loose, out, engine=engine, overwrite=overwrite)
     # an existing crimp is replaced only when the new one succeeded
     work = begin_run(out, overwrite=overwrite, prefix="crimp")
     try:
+        found = {}
+        if crimp.pins_crimp:  # the loose heights first, beside the crimp's folder
+            search = sibling(Path(out).resolve(), "." + LOOSE_HEIGHT)
+            scene, found = pin_crimp(scene, search, engine)
+            loose = scene.model() if form == "fabric" else periodic_cell(scene)
+            crimp = crimp_stage(scene)
         result = crimp.run(loose, work, engine=engine)
+        if found:  # the search's runs into the crimp's folder, what it found beside them
+            if mpi.is_root():
+                shutil.rmtree(work / LOOSE_HEIGHT, ignore_errors=True)
+                shutil.move(str(search), str(work / LOOSE_HEIGHT))
+            mpi.barrier()
+            _record_pin(work, dict(found, calibration=str(work / LOOSE_HEIGHT)), result)
     except (RunInterrupted, KeyboardInterrupt):
         raise
     except BaseException as exc:
@@ -73,6 +98,40 @@ def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
         raise
     summary = finish_run(out, work, result.summary)
     return dataclasses.replace(result, run_dir=Path(out).resolve(), summary=summary)
+
+
+def _record_pin(crimp_dir: Path, found: dict, result: CrimpResult | None = None) -> None:
+    """Write what the loose-height search found into the crimp folder (``PINNED``, and
+    ``pinned_crimp`` in its ``summary.json``): a later stage rebuilds its scene from it."""
+    if result is not None:
+        result.summary["pinned_crimp"] = found
+    if mpi.is_root():
+        write_json(Path(crimp_dir) / PINNED, found)
+        path = Path(crimp_dir) / "summary.json"
+        if path.exists():
+            summary = json.loads(path.read_text())
+            summary["pinned_crimp"] = found
+            write_json(path, summary)
+    mpi.barrier()
+
+
+def scene_of_crimp(scene: Scene, crimp_dir: Path) -> Scene:
+    """The scene a finished crimp folder was crimped with: ``scene`` with the loose
+    heights and expansion its ``PINNED`` file records (``crimp_by = "loose_height"``),
+    else ``scene`` itself.
+
+    Raises:
+        InputError: the scene asks for ``crimp_by = "loose_height"`` and the folder was
+            crimped without it (its yarns are not the ones the scene states).
+    """
+    path = Path(crimp_dir) / PINNED
+    if path.exists():
+        return pinned_scene(scene, json.loads(path.read_text()))
+    if crimp_stage(scene).pins_crimp:
+        raise InputError(f"{crimp_dir} was crimped without [crimp] crimp_by = "
+                         f"\"loose_height\" (no {PINNED}): its loose sections are not the "
+                         f"ones that reach the scene's crimp; crimp the scene again")
+    return scene
 
 
 def stage_mode(stage_dir: Path, resume: bool) -> str:
@@ -174,6 +233,13 @@ def _check_crimp_targets(scene: Scene, source: str) -> None:
         crimp.check_model(periodic_cell(scene) if source == "cell" else scene.model())
 
 
+def _stages(scene: Scene, test: str):
+    """The crimp, the test's protocol and its coupon (None: the test takes the cell) of
+    ``scene`` (built again once the loose heights changed the virtual fibre)."""
+    coupon = coupon_stage(scene, test)[0] if TESTS[test].coupon is not None else None
+    return crimp_stage(scene), protocol_stage(scene, test), coupon
+
+
 def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None,
                 overwrite: bool = False, check_rate: bool = False, resume: bool = False,
                 crimped: Path | None = None) -> dict:
@@ -197,14 +263,29 @@ def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None
         crimp_dir = Path(crimped) if crimped is not None else out / "crimp"
         mode = "done" if crimped is not None else stage_mode(crimp_dir, resume)
         if mode != "done":
+            found = {}
+            if crimp.pins_crimp:  # 0. the loose sections that reach the stated crimp
+                search = out / LOOSE_HEIGHT
+                if resume and (search / PINNED).exists():
+                    found = json.loads((search / PINNED).read_text())
+                    scene = pinned_scene(scene, found)
+                else:
+                    scene, found = pin_crimp(scene, search, engine)
+                    _stop_between_stages(out, "loose-height")
+                crimp, protocol, coupon = _stages(scene, test)
             loose = periodic_cell(scene) if source == "cell" else scene.model()
             crimp_result: CrimpResult | None = crimp.run(
                 loose, crimp_dir, engine=engine, overwrite=True, resume=mode == "resume")
+            if found:
+                _record_pin(crimp_dir, found, crimp_result)
             crimped_model = crimp_result.model
             _stop_between_stages(out, "crimp")
         else:
             crimp_result = None
             crimped_model = load_crimped(crimp_dir)
+            if (Path(crimp_dir) / PINNED).exists() or crimp.pins_crimp:
+                scene = scene_of_crimp(scene, crimp_dir)
+                crimp, protocol, coupon = _stages(scene, test)
         # 2. coupon
         coupon_dir = out / "coupon"
         if coupon is None:
@@ -224,6 +305,8 @@ def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None
     summary = {"test": test, "scene": scene.source, "results": str(out / section(test)),
                "crimp": str(crimp_dir), "coupon_beads": specimen.n_beads,
                "test_summary": result.summary}
+    if (Path(crimp_dir) / PINNED).exists():  # the loose heights the crimp was reached with
+        summary["pinned_crimp"] = json.loads((Path(crimp_dir) / PINNED).read_text())
     if crimp_result is not None:
         summary["crimped"] = crimp_result.summary.get("crimped")
         summary["crimp_stop"] = crimp_result.summary.get("stop")

@@ -285,6 +285,10 @@ def test_the_plain_weave_with_the_law_crimps(tmp_path):
     text = example_scene("plain_weave.toml").read_text()
     assert 'within_family = { law = "glass", form = "law" }' in text  # the example's own
     text = text.replace('target_tension = "1 cN/tex"\n', "")  # one crimp, not the search
+    for key in ("target_crimp_pct = { warp = 1.5, weft = 1.5 }\n",
+                'crimp_by = "loose_height"\n', "crimp_tolerance_pct = 0.05\n"):
+        assert key in text
+        text = text.replace(key, "")  # nor the loose height's
     text = text.replace("warp = -0.068, weft = -0.068", "warp = -0.02, weft = -0.02")
     assert "target_tension" not in text and "-0.02" in text
     scene = tmp_path / "law.toml"

@@ -16,6 +16,21 @@ from .fabrics import parallel_fibres, plain_weave_cell
 
 #: the plain-weave example's crimp lines (a weaving-tension search from −6.8 %)
 EXAMPLE_CRIMP = 'target_tension = "1 cN/tex"\nexpansion = { warp = -0.068, weft = -0.068 }'
+#: the example's crimp stated and reached by the loose height: out, where a test sets its own
+EXAMPLE_PIN = ('target_crimp_pct = { warp = 1.5, weft = 1.5 }\n', 'crimp_by = "loose_height"\n',
+               "crimp_tolerance_pct = 0.05\n")
+
+
+def example_text() -> str:
+    """The plain-weave example's file without its stated crimp (the expansion and the
+    weaving tension stay)."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    for line in EXAMPLE_PIN:
+        assert line in text
+        text = text.replace(line, "")
+    return text
 
 
 def test_rest_crimp_is_the_loose_crimp_of_an_unstressed_fabric():
@@ -181,12 +196,11 @@ def test_scene_file_targets_on_the_example_cell(tmp_path):
     """The plain-weave example with its expansion replaced by target crimps: the derived
     strains follow the cell's loose geometry; an unreachable one fails before LAMMPS,
     naming the scene file's key and the numbers."""
-    from pathlib import Path
 
     from fabmd.pipeline import crimp_stage, periodic_cell
     from fabmd.scenefile import load_scene
 
-    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    text = example_text()
     assert EXAMPLE_CRIMP in text
     scene_file = tmp_path / "targets.toml"
     scene_file.write_text(text.replace(EXAMPLE_CRIMP,
@@ -207,12 +221,11 @@ def test_scene_file_targets_on_the_example_cell(tmp_path):
 
 
 def test_calibration_refuses_a_scene_whose_crimp_derives_its_expansion(tmp_path):
-    from pathlib import Path
 
     from fabmd.calibration import run_calibration
     from fabmd.scenefile import load_scene
 
-    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    text = example_text()
     scene_file = tmp_path / "targets.toml"
     scene_file.write_text(text.replace(EXAMPLE_CRIMP,
                                        "target_crimp_pct = { warp = 1.0 }")
@@ -225,9 +238,8 @@ def test_calibration_refuses_a_scene_whose_crimp_derives_its_expansion(tmp_path)
 def _unreachable_auto_scene(tmp_path):
     """The plain-weave example whose weft target is "auto" with a margin (50 points) above
     its loose crimp: nothing to shrink, refused with the numbers."""
-    from pathlib import Path
 
-    text = (Path(__file__).parents[1] / "examples" / "plain_weave.toml").read_text()
+    text = example_text()
     scene_file = tmp_path / "targets.toml"
     scene_file.write_text(text.replace(EXAMPLE_CRIMP,
                                        'target_crimp_pct = { weft = "auto" }\n'

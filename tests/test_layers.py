@@ -23,7 +23,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("results",),
     ("protocols",),
     ("verification", "export"),
-    ("scenefile", "settings", "stages", "preflight", "pipeline", "presets", "calibration"),
+    ("scenefile", "settings", "stages", "preflight", "loose_height", "pipeline", "presets",
+     "calibration"),
     ("cli", "__main__", ""),  # "" is fabmd/__init__.py: the public API on top
 )
 

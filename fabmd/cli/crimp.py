@@ -55,7 +55,15 @@ def _datasheet_line(s: dict) -> str:
 
 
 def _targets_text(s: dict) -> str:
-    """One line per family whose expansion came from ``[crimp] target_crimp_pct`` ('')."""
+    """One line per family whose expansion came from ``[crimp] target_crimp_pct`` (''),
+    or whose loose height was searched for it (``crimp_by = "loose_height"``)."""
+    pin = s.get("pinned_crimp")
+    if pin:
+        return "".join(
+            f"  {f}: loose section {1e3 * h:.4g} mm high for the target crimp "
+            f"{pin['target_crimp_pct'][f]:.2f} % at the weaving tension "
+            f"({pin['runs']} crimp runs: loose_height/)\n"
+            for f, h in pin["loose_height_m"].items())
     return "".join(
         f"  {f}: expansion {t['expansion']:+.4f} from its loose rest crimp "
         f"{t['loose_rest_crimp_pct']:.2f} % to the target {t['target_crimp_pct']:.2f} %"

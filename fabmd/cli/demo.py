@@ -54,11 +54,15 @@ def run(args) -> int:
     say(f"1. loose fabric: {loose.n_beads} beads, {loose.n_fibres} virtual fibres "
         f"-> loose/preview.png")
     c = _crimp(scene, out, engine, args.preset, say)
+    pin = c.get("pinned_crimp")
+    heights = "" if not pin else (
+        "; loose sections " + " / ".join(f"{1e3 * h:.3f}" for h in pin["loose_height_m"].values())
+        + f" mm high for the stated crimp (found in {pin['runs']} crimp runs)")
     say(f"2. crimp (periodic cell, {c['crimped']['n_beads']} beads, {c['wall_s']:.1f} s): "
         f"thickness {1e3 * c['loose']['thickness_m']:.2f} -> "
         f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp (per fibre) "
         + ", ".join(f"{f} {v:.2f} %" for f, v in c["crimped"]["crimp_pct"].items())
-        + f"; {c.get('stop', '')} -> crimp/sections.png")
+        + f"{heights}; {c.get('stop', '')} -> crimp/sections.png")
     tension = run_test(scene, "tension", out / "tension", engine=engine,
                        crimped=out / "crimp")
     t = tension["test_summary"]
@@ -97,7 +101,8 @@ def _crimp(scene, out: Path, engine, preset: str, say) -> dict:
     """The crimp stage's summary. With ``--fast`` (one virtual fibre per yarn) a weaving
     tension the search cannot reach — one-fibre yarns jump across it, 10.4 → 4.4 N at the
     same shrink on the example (measured) — goes on from the closest run, said; a set-up
-    check, not numbers. Any other preset stops there."""
+    check, not numbers. Any other preset stops there. (``--fast`` does not search the
+    loose sections for a stated crimp: :class:`fabmd.presets.Preset` ``pin_crimp``.)"""
     import json
 
     from ..errors import CalibrationNotReached

@@ -80,10 +80,7 @@ from ..results.folder import prepare_run_folder, write_json
 from ..scene.outputs import TrajectoryOutput
 from .calibrate_knobs import check_targets, default_thickness_families
 from .calibrate_search import CoupledSearch, Knob, next_strain, on_grid
-from .crimp import Crimp, CrimpResult
-
-#: what may reach a family's crimp (``CrimpTargets.crimp_by``)
-CRIMP_BY = ("expansion", "loose_height")
+from .crimp import CRIMP_BY, Crimp, CrimpResult
 
 
 @dataclass(frozen=True)
@@ -116,6 +113,11 @@ class CrimpTargets:
             count kept: the crimp the crimp stage gives follows the loose section), so
             that crimp and tension of one family are reached together (the tension by
             the expansion). Needs a scene (the cell is built again for each height).
+        tied_heights: with ``crimp_by = "loose_height"``, groups of families whose loose
+            height moves as one (families drawn alike with the same crimp target: a
+            balanced weave stays balanced, where two free heights can part, one family
+            drawn higher than the other for the same crimps); the group's knob is its
+            mean crimp, and each family's crimp is reported against the target.
     """
 
     thickness_m: float | None = field(default=None, metadata=schema.unit("length"))
@@ -130,6 +132,7 @@ class CrimpTargets:
     max_runs: int = 12
     datasheet: bool = True
     crimp_by: str = "expansion"
+    tied_heights: tuple[tuple[str, ...], ...] = ()
 
     def __post_init__(self):
         from .crimp_tension import check_target_tension
@@ -288,9 +291,10 @@ def calibrate(model: BeadModel, targets: CrimpTargets, base: Crimp | None = None
                          "each height: run it from a scene (fabmd calibrate SCENE, or "
                          "fabmd.calibration.run_calibration)")
     heights = (cell_for, loose_height_m) if tall else None
-    for knob in knobs:
-        if knob.acts_on == "loose_height" and knob.families[0] in (loose_height_range or {}):
-            knob.bounds = tuple(loose_height_range[knob.families[0]])
+    for knob in knobs:  # a tied group's height: where every family of it can be drawn
+        ranges = [(loose_height_range or {}).get(f) for f in knob.families]
+        if knob.acts_on == "loose_height" and all(ranges):
+            knob.bounds = (max(r[0] for r in ranges), min(r[1] for r in ranges))
     root = prepare_run_folder(out, overwrite=overwrite, prefix="calibration")
     coupled = CoupledSearch(len(knobs))
     runs: list[dict] = []
@@ -515,14 +519,17 @@ def _conclude(knobs: list[Knob], uncontrolled: list[Knob], runs: list[dict], max
                for kn in missed]
     for kn in uncontrolled:
         q = best_run["achieved"][kn.name]
-        if kn.acts_on in ("crimp_search", "reported"):
+        if kn.acts_on in ("crimp_search", "reported", "tied_height"):
             kn.verdict = "met" if q is not None and kn.converged(q) else (
                 f"{kn.name}: {kn.text(q)} against {kn.text(kn.target)} ± "
-                f"{kn.text(kn.tolerance)}: " + (
-                    "the crimp stage's tension search did not reach it (see the run's "
-                    "crimp/summary.json tension_search)" if kn.acts_on == "crimp_search"
-                    else "reported, not controlled (the expansions serve the tension, the "
-                         "loose heights the crimp)"))
+                f"{kn.text(kn.tolerance)}: " + {
+                    "crimp_search": "the crimp stage's tension search did not reach it "
+                                    "(see the run's crimp/summary.json tension_search)",
+                    "reported": "reported, not controlled (the expansions serve the "
+                                "tension, the loose heights the crimp)",
+                    "tied_height": "its loose height is tied to its group's "
+                                   "(tied_heights), whose mean crimp was reached: the "
+                                   "families crimp apart"}[kn.acts_on])
             if kn.verdict != "met":
                 reasons.append(kn.verdict)
             continue
@@ -588,8 +595,9 @@ def _achieved(result: CrimpResult, pressed, knobs: list[Knob],
                 out[knob.name] = crimped["thickness_m"]
             else:
                 out[knob.name] = thickness_under(pressed.summary, targets.at_pressure_pa)
-        elif knob.kind == "crimp":
-            out[knob.name] = crimped["crimp_pct"][fam]
+        elif knob.kind == "crimp":  # a tied group's (several families): their mean
+            out[knob.name] = sum(crimped["crimp_pct"][f] for f in knob.families) / len(
+                knob.families)
         else:
             out[knob.name] = result.summary["yarn_tension"][fam]["yarn_n"]
     return out

@@ -104,7 +104,19 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
             knob.acts_on = "reported"
         (uncontrolled if knob.acts_on == "reported" else knobs).append(knob)
     thickness_fams = set(fams) if targets.thickness_m is not None else set()
+    tied = _tied_groups(targets) if by_height else []
+    for group in tied:  # one loose height for the group, each family's crimp reported
+        target = float(targets.crimp_pct[group[0]])
+        knobs.append(Knob("crimp:" + "+".join(group), "crimp", group, target,
+                          targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE, 0.0,
+                          first_step=0.1, acts_on="loose_height"))
+        uncontrolled.extend(Knob(f"crimp:{fam}", "crimp", (fam,), target,
+                                 targets.crimp_tolerance_pct, +1, (-1.0, 1.0), 0.0,
+                                 acts_on="tied_height") for fam in group)
+    in_groups = {fam for group in tied for fam in group}
     for fam, crimp_target in targets.crimp_pct.items():
+        if fam in in_groups:
+            continue
         if by_height:  # the loose section, not the expansion: never taken by the thickness
             knobs.append(Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
                               targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE, 0.0,
@@ -130,3 +142,20 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
                     first_step=min(max(newtons / stiffness, 2e-3), 0.03))
         (uncontrolled if fam in thickness_fams else knobs).append(knob)
     return knobs, uncontrolled
+
+
+def _tied_groups(targets: CrimpTargets) -> list[tuple[str, ...]]:
+    """``targets.tied_heights``' groups of two or more families with crimp targets, each
+    with one target for all (refused otherwise)."""
+    groups = []
+    for group in targets.tied_heights:
+        fams = tuple(f for f in group if f in targets.crimp_pct)
+        if len(fams) < 2:
+            continue
+        if len({float(targets.crimp_pct[f]) for f in fams}) > 1:
+            raise InputError(f"calibrate.tied_heights {list(fams)}: one loose height for "
+                             f"families with different crimp targets "
+                             f"({ {f: targets.crimp_pct[f] for f in fams} })")
+        groups.append(fams)
+    return groups
+

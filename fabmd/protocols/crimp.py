@@ -53,6 +53,8 @@ from .crimp_balance import crimp_interchange, warn_interchange
 
 PROTOCOL = "crimp"
 CRIMPED = "crimped"
+#: what may reach a family's crimp (``Crimp.crimp_by``, ``CrimpTargets.crimp_by``)
+CRIMP_BY = ("expansion", "loose_height")
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,17 @@ class Crimp:
             in ``expansion``; beside ``target_tension`` only ``"auto"``, which then bounds
             the tension search's shrink instead of setting it.
         auto_margin_pct: the crimp [%] an ``"auto"`` family keeps (> 0; default 3).
+        crimp_by: what reaches a number in ``target_crimp_pct``: ``"expansion"``
+            (default: the family's expansion is derived from it) or ``"loose_height"``
+            (the height of the family's loose section is searched for it, while
+            ``target_tension`` sets the expansion: crimp and weaving tension of one family
+            together, as the fabric states them; the crimp a discretisation leaves at a
+            tension follows the loose section it is drawn with). ``"loose_height"`` draws
+            the cell again for each height, so it runs from a scene
+            (:func:`fabmd.loose_height.pin_crimp`, done by ``fabmd crimp``, ``fabmd test``
+            and ``fabmd demo``), not from :meth:`run` on a model.
+        crimp_tolerance_pct: with ``crimp_by = "loose_height"``, how close each family's
+            crimp comes to its target [percentage points] (> 0; default 0.05).
         trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
             stops once quasi-static, so frames are spread over :meth:`expected_steps`
             (the ramp and a quarter of the relaxation budget); the crimped state is
@@ -102,6 +115,8 @@ class Crimp:
     target_tension: dict | str | float | None = None
     target_crimp_pct: dict[str, float | str] = field(default_factory=dict)
     auto_margin_pct: float = 3.0
+    crimp_by: str = "expansion"
+    crimp_tolerance_pct: float = 0.05
 
     def __post_init__(self):
         if not isinstance(self.expansion, dict):
@@ -117,8 +132,45 @@ class Crimp:
             from .crimp_tension import check_target_tension
 
             check_target_tension(self.target_tension)
-        if self.target_crimp_pct:
+        if self.crimp_by not in CRIMP_BY:
+            raise InputError(f"crimp.crimp_by must be one of {', '.join(CRIMP_BY)}, got "
+                             f"{self.crimp_by!r}")
+        inputs.positive("crimp.crimp_tolerance_pct", self.crimp_tolerance_pct)
+        if self.crimp_by == "loose_height":
+            self._check_loose_height()
+        elif self.target_crimp_pct:
             self._check_crimp_targets()
+
+    @property
+    def pins_crimp(self) -> bool:
+        """Crimp and tension reached together through the loose section (``crimp_by =
+        "loose_height"``): the scene's cell is drawn again, see :attr:`crimp_by`."""
+        return self.crimp_by == "loose_height"
+
+    def _check_loose_height(self) -> None:
+        from .crimp_target import check_target_crimp
+        from .crimp_tension import check_target_tension
+
+        words = {f: v for f, v in self.target_crimp_pct.items() if isinstance(v, str)}
+        if not self.target_crimp_pct or words:
+            raise InputError(
+                "crimp.crimp_by = \"loose_height\" searches each family's loose section "
+                "height for its crimp: give crimp.target_crimp_pct as numbers per family "
+                f"(e.g. {{ warp = 1.5, weft = 1.5 }}), got {self.target_crimp_pct!r}")
+        check_target_crimp(self.target_crimp_pct, self.auto_margin_pct)
+        if self.target_tension is None:
+            raise InputError(
+                "crimp.crimp_by = \"loose_height\" reaches the crimp at a weaving tension: "
+                "give crimp.target_tension too (e.g. \"1 cN/tex\"); a crimp alone is "
+                "reached by the expansion (crimp_by = \"expansion\", the default)")
+        check_target_tension(self.target_tension)
+        tension = self.target_tension
+        if isinstance(tension, dict):
+            missing = sorted(set(self.target_crimp_pct) - set(tension))
+            if missing:
+                raise InputError(f"crimp.crimp_by = \"loose_height\": crimp.target_tension "
+                                 f"names no tension for {missing}, whose crimp is a target "
+                                 f"(the tension sets their expansion)")
 
     def _check_crimp_targets(self) -> None:
         from .crimp_target import check_target_crimp
@@ -138,7 +190,8 @@ class Crimp:
             raise InputError(f"crimp.target_crimp_pct and crimp.target_tension both name "
                              f"{sorted(named & numbers)}: a family's expansion serves one "
                              f"target (\"auto\" may stand beside a tension: it bounds the "
-                             f"shrink)")
+                             f"shrink); crimp_by = \"loose_height\" reaches both, the "
+                             f"crimp by the loose section's height")
 
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
@@ -150,8 +203,9 @@ class Crimp:
 
     def crimp_targets(self, model: BeadModel) -> dict[str, dict]:
         """Per family of ``target_crimp_pct``: loose rest crimp, target and the derived
-        expansion (:func:`fabmd.protocols.crimp_target.derive_expansion`); {} without."""
-        if not self.target_crimp_pct:
+        expansion (:func:`fabmd.protocols.crimp_target.derive_expansion`); {} without, or
+        where the loose height serves the crimp."""
+        if not self.target_crimp_pct or self.pins_crimp:
             return {}
         from .crimp_target import derive_expansion
 
@@ -159,8 +213,9 @@ class Crimp:
 
     def family_expansion(self, model: BeadModel) -> dict[str, float]:
         """The strain α·ΔT per family the ramp reaches: ``expansion`` and those derived
-        from ``target_crimp_pct`` (the same dict as ``expansion`` without targets)."""
-        if not self.target_crimp_pct:
+        from ``target_crimp_pct`` (the same dict as ``expansion`` without targets, or
+        where the loose height serves the crimp)."""
+        if not self.target_crimp_pct or self.pins_crimp:
             return self.expansion
         derived = {f: t["expansion"] for f, t in self.crimp_targets(model).items()}
         return {**self.expansion, **derived}
@@ -285,6 +340,11 @@ class Crimp:
         is warned about and kept in the summary's ``crimp_interchange``; ``quiet``: not
         warned (the runs of a search, which judges the outcome itself).
         """
+        if self.pins_crimp:
+            raise InputError("crimp.crimp_by = \"loose_height\" draws the scene's cell again "
+                             "for each loose height: crimp from the scene (fabmd crimp / "
+                             "fabmd test, fabmd.pipeline.run_crimp, or "
+                             "fabmd.loose_height.pin_crimp, which returns the scene to crimp)")
         engine = engine or Engine()
         if self.target_tension is not None:
             from .crimp_tension import crimp_to_tension
