@@ -58,6 +58,7 @@ from _results import machine, table, update_section  # noqa: E402
 from fabmd.engine import Engine  # noqa: E402
 from fabmd.errors import CalibrationNotReached, OverlapWarning  # noqa: E402
 from fabmd.examples_dir import example_scene  # noqa: E402
+from fabmd.loose_height import without_crimp_targets  # noqa: E402
 from fabmd.pipeline import run_crimp, run_test  # noqa: E402
 from fabmd.presets import PRESETS, speed_fraction  # noqa: E402
 from fabmd.results.curves import curve_difference  # noqa: E402
@@ -98,6 +99,7 @@ class Config:
     mass_scaling: float = 1.0
     speed: float = 1.0  # physical loading speed over the example scene's
     contact_factor: float = 1.0  # diagnostics only: factor on the contact stiffness rule
+    pin_crimp: bool = True  # keep the scene's stated crimp (False: --fast's drawn section)
 
     @property
     def label(self) -> str:
@@ -138,8 +140,9 @@ class Config:
             protocols[table_name]["speed_fraction"] = (speeds[table_name] * self.speed
                                                        * keep_physical)
             protocols[table_name]["coupon"] = {"cells": list(cells)}
-        return dataclasses.replace(base, fabric=fabric, discretisation=disc, contact=contact,
-                                   protocols=protocols)
+        scene = dataclasses.replace(base, fabric=fabric, discretisation=disc, contact=contact,
+                                    protocols=protocols)
+        return scene if self.pin_crimp else without_crimp_targets(scene)
 
 
 def base_speeds(base: Scene) -> dict[str, float]:
@@ -152,7 +155,7 @@ def preset_config(name: str) -> Config:
     """The configuration a preset of :mod:`fabmd.presets` runs the example scene with."""
     p = PRESETS[name]
     return Config(n_fibres=p.n_fibres or 7, spacing_ratio=p.spacing_ratio or 0.5,
-                  speed=p.speed_factor)
+                  speed=p.speed_factor, pin_crimp=p.pin_crimp)
 
 
 #: the refined reference: most fibres and finest spacing affordable, half speed
@@ -220,6 +223,10 @@ def run_config(config: Config, base: Scene, root: Path, crimps: dict) -> dict:
         crimps[key] = {"dir": str(folder), "wall_s": time.perf_counter() - t0,
                        "beads": c["n_beads"], "thickness_mm": 1e3 * c["thickness_m"],
                        "crimp_pct": float(np.mean(list(c["crimp_pct"].values()))),
+                       "crimp_pct_by_family": {f: float(v) for f, v in c["crimp_pct"].items()},
+                       **({"loose_height_m": summary["pinned_crimp"]["loose_height_m"],
+                           "loose_height_runs": summary["pinned_crimp"]["runs"]}
+                          if summary.get("pinned_crimp") else {}),
                        **({"tension_missed": missed} if missed else {})}
     record["crimp"] = {k: v for k, v in crimps[key].items() if k != "dir"}
     for test, name in (("tension", "tension"), ("picture-frame", "picture_frame")):

@@ -134,6 +134,54 @@ def test_presets_errors_are_taken_past_the_toe_and_at_the_frame_angles():
     assert "Reference **N19 s/d 0.5 v×0.5**" in bench.section(data)
 
 
+def test_presets_at_the_reference_crimp_keep_runs_already_there_and_say_what_missed():
+    """--pinned: a preset within the tolerance of the reference's crimp in every family
+    keeps its runs; the pinned table judges against the plain reference, counts the
+    calibration in the run time and names the closest crimp of a calibration that missed."""
+    bench = load_benchmark("presets")
+    tol = bench.PIN_TOLERANCE_PCT
+    ref_crimp = {"warp": 1.5, "weft": 1.6}
+    near = {"crimp": {"crimp_pct_by_family": {"warp": 1.5 + 0.9 * tol, "weft": 1.6}}}
+    off = {"crimp": {"crimp_pct_by_family": {"warp": 1.5, "weft": 1.6 + 1.1 * tol}}}
+    assert bench.at_crimp(near, ref_crimp) and not bench.at_crimp(off, ref_crimp)
+    assert not bench.at_crimp({"crimp": {"crimp_pct": 1.5}}, ref_crimp)  # no families
+
+    curve = {"x": [0.0, 1.0], "y": [0.0, 1.0]}
+    configs = bench.configs()
+
+    def record(label, past, wall, crimp):
+        return {"label": label, "wall_s": wall,
+                "crimp": {"beads": 100, "crimp_pct": sum(crimp.values()) / 2,
+                          "crimp_pct_by_family": crimp},
+                "tension": {"values": {f"F{s}%": past for s in (2, 3, 4, 5, 6)},
+                            "curve": curve},
+                "picture_frame": {"values": {**{f"F{a}°": 1.0 for a in (10, 20, 30, 40)},
+                                             "locking": 30.0}, "curve": curve}}
+
+    reference = record(configs["reference"].label, 100.0, 40.0, ref_crimp)
+    pinned_default = record(configs["default"].label, 105.0, 10.0, ref_crimp)
+    pinned_default["pinned"] = {"calibrated": True, "calibration_wall_s": 5.0}
+    data = {"records": [record(configs["default"].label, 70.0, 10.0, {"warp": 2, "weft": 2}),
+                        reference],
+            "base_speed": {"tension": 1e-4, "picture_frame": 1e-3},
+            "pinned": {"default": pinned_default,
+                       "fast": {"label": configs["fast"].label, "pinned": {
+                           "calibrated": False, "missed": "...", "runs": 4,
+                           "calibration_wall_s": 3.0,
+                           "closest": {"crimp:warp": 2.56, "crimp:weft": 2.6,
+                                       "tension:warp": 5.5},
+                           "loose_height_m": {"warp": 5.6e-4, "weft": 5.6e-4}}}}}
+    plain, errors = bench.rows(data)
+    assert errors["default"]["tension"]["combined"] == pytest.approx(0.3)
+    rows, errors = bench.rows(data, pinned=True)
+    assert [r[0] for r in rows] == ["fast", "default"]
+    assert errors["default"]["tension"]["combined"] == pytest.approx(0.05)
+    assert rows[1][4] == "15" and rows[1][3].endswith("(calibrated)")
+    assert rows[0][3] == "not reached in 4 runs: closest 2.56 / 2.60 (loose height 0.56 / 0.56 mm)"
+    assert "**At the reference's crimp**" in bench.section(data)
+    assert "**At the reference's crimp**" not in bench.section({**data, "pinned": {}})
+
+
 def load_convergence():
     return load_benchmark("convergence")
 
