@@ -143,10 +143,11 @@ def pin_crimp(scene: Scene, out: Path, engine: Engine | None = None,
 
 
 def alike_families(scene: Scene, crimp_pct: dict, tension) -> tuple[tuple[str, ...], ...]:
-    """The families drawn alike (every yarn input the same but the name) with one crimp
-    and one tension target: one group whose loose height moves as one, so that a balanced
-    weave stays balanced (two free heights part: the example's 7-fibre cell ended at 0.56
-    and 0.51 mm for 1.53 / 1.46 %, measured); () where there is none."""
+    """Groups of the families drawn alike (every yarn input the same but the name) with one
+    crimp and one tension target: each group's loose height moves as one, so that a
+    balanced weave stays balanced (two free heights part: the example's 7-fibre cell ended
+    at 0.56 and 0.51 mm for 1.53 / 1.46 %, measured); a family unlike the others (a 3D
+    fabric's binders) keeps its own. () where no two are alike."""
     specs = scene.fabric.specs()
     tensions = tension if isinstance(tension, dict) else {f: tension for f in crimp_pct}
 
@@ -154,9 +155,14 @@ def alike_families(scene: Scene, crimp_pct: dict, tension) -> tuple[tuple[str, .
         return (dataclasses.replace(specs[fam], name=None), float(crimp_pct[fam]),
                 str(tensions.get(fam)))
 
-    fams = [f for f in crimp_pct if f in specs]
-    group = tuple(f for f in fams if drawing(f) == drawing(fams[0])) if fams else ()
-    return (group,) if len(group) > 1 and len(group) == len(fams) else ()
+    groups: list[list[str]] = []
+    for fam in (f for f in crimp_pct if f in specs):
+        group = next((g for g in groups if drawing(g[0]) == drawing(fam)), None)
+        if group is None:
+            groups.append([fam])
+        else:
+            group.append(fam)
+    return tuple(tuple(g) for g in groups if len(g) > 1)
 
 
 def _targets_text(crimp_pct: dict) -> str:

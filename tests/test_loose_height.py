@@ -2,7 +2,9 @@
 tension together (the loose section's height serves the crimp), and every later stage runs
 on the yarns that reached it."""
 
+import dataclasses
 import json
+from types import SimpleNamespace
 
 import pytest
 
@@ -140,6 +142,15 @@ def test_families_drawn_alike_with_one_target_share_one_loose_height(tmp_path):
                           {"warp": "1 N", "weft": "2 N"}) == ()
     wider = scene.with_yarn_heights({"weft": 0.45e-3})
     assert alike_families(wider, {"warp": 2.0, "weft": 2.0}, "1 N") == ()
+    # a 3D fabric whose weft is drawn as its warp: those two share a height, the binders
+    # keep their own
+    three_d = load_scene(example_scene("through_thickness_3d.toml"))
+    targets = {fam: 1.0 for fam in ("warp", "weft", "binder")}
+    assert alike_families(three_d, targets, "1 cN/tex") == ()  # as shipped: none alike
+    specs = three_d.fabric.specs()
+    specs["weft"] = dataclasses.replace(specs["warp"], name="weft")
+    same = SimpleNamespace(fabric=SimpleNamespace(specs=lambda: specs))
+    assert alike_families(same, targets, "1 cN/tex") == (("warp", "weft"),)
 
     cell = periodic_cell(scene)
     base = crimp_stage(scene)
