@@ -2,30 +2,27 @@
 
 A preset changes how the scene is *discretised and loaded*, never what fabric it
 describes: virtual fibres per yarn, bead spacing ratio s/d, and the loading
-speed of the virtual tests (a factor on every test's ``speed_fraction``). The
-choices sit on the run-time/error Pareto front measured by
-``benchmarks/accuracy.py`` (see ``benchmarks/RESULTS.md``, "Run time against
-error"); the README states the expected error of each.
+speed of the virtual tests (a factor on every test's ``speed_fraction``). A scene that
+states its crimp (``[crimp] crimp_by = "loose_height"``) is crimped to it by every preset
+but ``--fast``, whose one-fibre yarns cannot reach it (:attr:`Preset.pin_crimp`).
 
-Measured on the shipped plain weave (tension 15 × 5 mm to 3 %, picture frame 10 mm to
-50°), as the largest relative error against a reference of 19 fibres, s/d 0.5, half
-speed — tension: initial stiffness, force at 2 % and 3 %; picture frame: normalised
-force at 20° and 40°, locking angle:
+Measured on the shipped plain weave as it states its crimp (1.5 % at 1 cN/tex;
+``benchmarks/presets.py``, ``benchmarks/RESULTS.md`` "Presets against the reference",
+2026-12-06), signed errors against a reference of 19 fibres, s/d 0.5, half speed —
+tension: force at 4 / 5 / 6 % (3 × 1-cell coupon, past its toe); picture frame
+(2 × 2 cells): normalised force at 10 / 20 / 30 / 40°, locking angle:
 
-=========  ======  =====  =====  ==========  =======  =============
-preset     fibres  s/d    speed  run time    tension  picture frame
-=========  ======  =====  =====  ==========  =======  =============
-fast       1       0.25   × 1    0.13×       60 %     74 % (locking 7 %)
-default    7       0.5    × 1    1×          86 %     32 % (locking 6 %)
-accurate   19      0.5    × 1    8×          9 %      0.5 %
-=========  ======  =====  =====  ==========  =======  =============
+========  ======  ====  =====  ========  =================  ===========================  =======
+preset    fibres  s/d   speed  run time  tension            picture frame                locking
+========  ======  ====  =====  ========  =================  ===========================  =======
+fast      1       0.25  × 1    0.08×     −99 / −98 / −86 %  +278 / +757 / +593 / +328 %  +0.3°
+default   7       0.5   × 1    1×        +13 / +10 / +8 %   −26 / +0.4 / +3.7 / +10 %    −1.8°
+accurate  19      0.5   × 1    6.6×      0 / 0 / 0 %        +0.5 / +4.2 / +8.8 / +0.1 %  −1.6°
+========  ======  ====  =====  ========  =================  ===========================  =======
 
-Measured on the example's former inputs (default contact, −9 % crimp; commit 32bdace), not
-remeasured since it carries the within-family law (which :meth:`Scene.rediscretised`
-rebuilds on each preset's fibre). The reference is not converged in s/d (0.25 instead of
-0.5 moves the picture-frame force at 40° ×3.3 and the locking angle by −6°), so these are
-distances to the reference, not to a converged model. The force in the slack toe of
-tension (1 %) depends on the loading speed (about linearly) and is not in these numbers.
+The reference is not converged in s/d (RESULTS "Where the plain weave's convergence
+stands"), so these are distances to the reference, not to a converged model. The force
+in the slack toe of tension depends on the loading speed and is not in these numbers.
 """
 
 from __future__ import annotations

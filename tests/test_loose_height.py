@@ -176,3 +176,20 @@ def test_calibrate_says_a_stated_crimp_needs_no_calibration(tmp_path):
         run_calibration(tiny_scene(tmp_path), tmp_path / "cal",
                         settings={"crimp_pct": {"warp": 1.0}})
     assert not (tmp_path / "cal").exists()
+
+
+def test_fast_crimps_the_drawn_section_the_others_search():
+    """--fast's one-fibre yarns cannot reach the example's stated crimp: its scene keeps
+    the expansion and the weaving tension, not the crimp target; the default and
+    --accurate keep the search."""
+    from fabmd.presets import apply_preset
+    from fabmd.stages import crimp_stage
+
+    scene = load_scene(example_scene("plain_weave.toml"))
+    assert crimp_stage(scene).pins_crimp
+    fast = crimp_stage(apply_preset(scene, "fast"))
+    assert not fast.pins_crimp and not fast.target_crimp_pct
+    assert fast.target_tension == "1 cN/tex"
+    assert fast.expansion == crimp_stage(scene).expansion
+    assert crimp_stage(apply_preset(scene, "accurate")).pins_crimp
+    assert crimp_stage(apply_preset(scene, "default")).pins_crimp
