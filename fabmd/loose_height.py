@@ -183,10 +183,8 @@ def pinned_scene(scene: Scene, found: dict) -> Scene:
     or the ``PINNED`` file of a crimp folder read back), its crimp targets taken out."""
     plain = without_crimp_targets(scene)
     pinned = plain.with_yarn_heights(found["loose_height_m"])
-    protocols = {k: dict(v) if isinstance(v, dict) else v
-                 for k, v in pinned.protocols.items()}
-    protocols["crimp"] = {**protocols.get("crimp", {}), "expansion": dict(found["expansion"])}
-    return dataclasses.replace(pinned, protocols=protocols)
+    crimp = {**pinned.protocols["crimp"], "expansion": dict(found["expansion"])}
+    return dataclasses.replace(pinned, protocols={**pinned.protocols, "crimp": crimp})
 
 
 def without_crimp_targets(scene: Scene) -> Scene:

@@ -68,22 +68,18 @@ def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
     loose = scene.model() if form == "fabric" else periodic_cell(scene)
     crimp = crimp_stage(scene)
     crimp.check_model(loose)  # families and target crimps against this fabric: no folder yet
-    if out is None:
-        if crimp.pins_crimp:  # the search's runs go to a temporary folder
-            scene, _ = pin_crimp(scene, prepare_run_folder(None, prefix="loose-height"),
-                                 engine)
-            loose = scene.model() if form == "fabric" else periodic_cell(scene)
-            crimp = crimp_stage(scene)
-        return crimp.run(loose, out, engine=engine, overwrite=overwrite)
     # an existing crimp is replaced only when the new one succeeded
-    work = begin_run(out, overwrite=overwrite, prefix="crimp")
+    work = None if out is None else begin_run(out, overwrite=overwrite, prefix="crimp")
     try:
         found = {}
         if crimp.pins_crimp:  # the loose heights first, beside the crimp's folder
-            search = sibling(Path(out).resolve(), "." + LOOSE_HEIGHT)
+            search = (prepare_run_folder(None, prefix="loose-height") if work is None
+                      else sibling(Path(out).resolve(), "." + LOOSE_HEIGHT))
             scene, found = pin_crimp(scene, search, engine)
             loose = scene.model() if form == "fabric" else periodic_cell(scene)
             crimp = crimp_stage(scene)
+        if work is None:
+            return crimp.run(loose, None, engine=engine, overwrite=overwrite)
         result = crimp.run(loose, work, engine=engine)
         if found:  # the search's runs into the crimp's folder, what it found beside them
             if mpi.is_root():
@@ -94,7 +90,8 @@ def run_crimp(scene: Scene, out: Path | None, engine: Engine | None = None,
     except (RunInterrupted, KeyboardInterrupt):
         raise
     except BaseException as exc:
-        abandon_run(out, work, exc)
+        if work is not None:
+            abandon_run(out, work, exc)
         raise
     summary = finish_run(out, work, result.summary)
     return dataclasses.replace(result, run_dir=Path(out).resolve(), summary=summary)
