@@ -130,8 +130,9 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     tried: list[dict] = []
     best = None
     refused: list[str] = []
+    settle = settle_force_n(model, targets)
     for run in range(max_runs):
-        stage = _stage(crimp, fams, expansion)
+        stage = _stage(crimp, fams, expansion, settle)
         result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0,
                            quiet=True)
         got = {f: result.summary["yarn_tension"][f]["yarn_n"] for f in fams}
@@ -168,8 +169,8 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     if error > tolerance and tried[-1]["largest_relative_error"] != error:
         # rerun the closest, so that the folder holds it
         closest = next(t for t in tried if t["largest_relative_error"] == error)
-        result = _stage(crimp, fams, closest["expansion"]).run(model, out, engine=engine,
-                                                              overwrite=True, quiet=True)
+        result = _stage(crimp, fams, closest["expansion"], settle).run(
+            model, out, engine=engine, overwrite=True, quiet=True)
     result.summary["tension_search"] = search
     if mpi.is_root():
         write_json(Path(result.run_dir) / "summary.json", result.summary)
@@ -204,11 +205,25 @@ def shrink_bounds(crimp, model: BeadModel, fams) -> dict[str, float]:
     return {f: derived[f]["expansion"] for f in auto}
 
 
-def _stage(crimp, fams, expansion: dict[str, float]):
+def settle_force_n(model: BeadModel, targets_n: dict[str, float]) -> float:
+    """The smallest target tension per virtual fibre [N] (a yarn's target over its
+    fibres): what each run of the search is judged at rest against, so that it stops
+    once the tension it reports is the one the fabric keeps."""
+    per_yarn = np.bincount(model.fibre_yarn, minlength=len(model.yarns) + 1)
+    out = []
+    for fam, target in targets_n.items():
+        counts = [per_yarn[k + 1] for k, y in enumerate(model.yarns) if y.family == fam]
+        out.append(target / max(float(np.mean(counts)) if counts else 1.0, 1.0))
+    return float(min(out))
+
+
+def _stage(crimp, fams, expansion: dict[str, float], settle: float | None = None):
     """One run of the search: the tension families at ``expansion``, their "auto" bound
-    (kept by the search) taken out of the crimp targets."""
+    (kept by the search) taken out of the crimp targets, judged at rest against
+    ``settle`` (N per virtual fibre)."""
     return dataclasses.replace(
         crimp, target_tension=None, expansion={**crimp.expansion, **expansion},
+        settle_force_n=settle if settle is not None else crimp.settle_force_n,
         target_crimp_pct={f: v for f, v in crimp.target_crimp_pct.items() if f not in fams})
 
 
