@@ -21,7 +21,10 @@ accurate  19      0.5   × 1    6.6×      0 / 0 / 0 %        +0.5 / +4.2 / +8.8
 ========  ======  ====  =====  ========  =================  ===========================  =======
 
 The reference is not converged in s/d (RESULTS "Where the plain weave's convergence
-stands"), so these are distances to the reference, not to a converged model. The force
+stands"), so these are distances to the reference, not to a converged model. Measured
+before the crimp stopped only at rest (RESULTS "The crimp stopped before the fabric was at
+rest"): each state's weaving tension fell to about a third as its test began; not
+re-measured since. The force
 in the slack toe of tension depends on the loading speed and is not in these numbers.
 """
 
