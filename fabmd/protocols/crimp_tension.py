@@ -130,7 +130,8 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     tried: list[dict] = []
     best = None
     refused: list[str] = []
-    settle = settle_force_n(model, targets)
+    # the crimp's own, where given; else the target per virtual fibre
+    settle = crimp.settle_force_n or settle_force_n(model, targets)
     for run in range(max_runs):
         stage = _stage(crimp, fams, expansion, settle)
         result = stage.run(model, out, engine=engine, overwrite=overwrite or run > 0,
