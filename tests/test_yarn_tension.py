@@ -116,6 +116,26 @@ def test_the_crimp_stops_once_the_fabric_keeps_the_tension_it_reports(tmp_path):
             held["yarn_tension"][fam]["yarn_n"], rel=0.02)
 
 
+@pytest.mark.lammps
+def test_a_crimp_that_stops_while_moving_says_so(tmp_path):
+    """The same cell and shrink with no target and no settle force: judged against the
+    shrink's |ε|·E·A it stops while moving (KE/U 0.14 at step 7,000, measured) and warns
+    (a run of a search, ``quiet``, records it in its summary without a warning)."""
+    from fabmd.errors import QuasiStaticWarning
+    from fabmd.examples_dir import example_scene
+    from fabmd.loose_height import without_crimp_targets
+    from fabmd.scenefile import load_scene
+    from fabmd.stages import crimp_stage, periodic_cell
+
+    scene = without_crimp_targets(load_scene(example_scene("plain_weave.toml")))
+    crimp = dataclasses.replace(crimp_stage(scene), target_tension=None,
+                                expansion={"warp": -0.0707, "weft": -0.0707})
+    with pytest.warns(QuasiStaticWarning, match="stopped with its kinetic energy"):
+        result = crimp.run(periodic_cell(scene), tmp_path / "c", engine=Engine(progress=False),
+                           figures=False)
+    assert result.summary["criterion"]["final_kinetic_to_strain_energy"] > 0.1
+
+
 def test_the_tension_search_judges_its_runs_at_rest_against_the_target(tmp_path,
                                                                         monkeypatch):
     """Each run of the search stops against the target per virtual fibre (a yarn's target

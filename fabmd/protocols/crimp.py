@@ -390,6 +390,7 @@ class Crimp:
             write_json(run_dir / "summary.json", summary)
             if not quiet:
                 warn_interchange(run_dir, summary, stacklevel=3)
+                warn_moving(run_dir, summary, self)
         summary = mpi.bcast_json(summary)
         if crimped is None:
             crimped = load_crimped(run_dir)
@@ -427,6 +428,28 @@ def load_crimped(run_dir: Path) -> BeadModel:
     return BeadModel.load(run_dir / f"{CRIMPED}.data", meta)
 
 
+#: a crimp that stops with more kinetic energy than this share of its bonds' energy is
+#: still moving (the example's crimp judged against its shrink's reference stopped at 0.41
+#: and 0.14; judged against its weaving tension, at 1.2e-4 ... 2.9e-2)
+MOVING_KINETIC_RATIO = 0.1
+
+
+def warn_moving(run_dir: Path, summary: dict, crimp: Crimp) -> None:
+    """Warn where a crimp judged against its shrink's reference stopped while moving
+    (kinetic energy over ``MOVING_KINETIC_RATIO`` of its bonds' energy)."""
+    criterion = summary.get("criterion") or {}
+    moving = criterion.get("final_kinetic_to_strain_energy") or 0.0
+    if summary.get("quasi_static") and moving > MOVING_KINETIC_RATIO \
+            and crimp.settle_force_n is None:
+        warnings.warn(f"crimp in {run_dir}: stopped with its kinetic energy {moving:.2g} of "
+                      f"its bonds' energy — judged against the shrink's reference force "
+                      f"({criterion.get('reference_force_n', 0.0):.3g} N per virtual fibre), "
+                      f"far above what its fibres carry: the tension and crimp it reports may "
+                      f"change once a test starts; state [crimp] target_tension (or "
+                      f"settle_force_n, the force a fibre should carry)", QuasiStaticWarning,
+                      stacklevel=3)
+
+
 def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
            figures: bool = True) -> tuple[BeadModel, dict]:
     """Read the crimp run back: crimped model (with final rest lengths), measures, history
@@ -460,6 +483,9 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
         warnings.warn(f"crimp in {run_dir}: {end.sentence()}; the crimped state may still be "
                       f"moving (raise crimp.quasi_static.max_steps)", QuasiStaticWarning,
                       stacklevel=2)
+    # the last history line's KE over the bonds' energy, no floor: a state still moving
+    # shows here whatever the reference
+    moving = float(raw["kinetic_j"][-1] / max(raw["strain_energy_j"][-1], 1e-300))
     final_ke = end.final_thermo.get("v_qs_ke_ratio", float(raw["ke_ratio"][-1]))
     final_force = end.final_thermo.get("v_qs_force_ratio", float(raw["force_ratio"][-1]))
     history = {"step": raw["step"], "kinetic_energy_j": raw["kinetic_j"],
@@ -486,10 +512,7 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
                       "final_kinetic_ratio": float(final_ke),
                       "final_force_ratio": float(final_force),
                       "reference_force_n": crimp.reference_force_n(loose),
-                      # the last history line's KE over the bonds' energy, no floor: a
-                      # state still moving shows here whatever the reference
-                      "final_kinetic_to_strain_energy": float(
-                          raw["kinetic_j"][-1] / max(raw["strain_energy_j"][-1], 1e-300)),
+                      "final_kinetic_to_strain_energy": moving,
                       "max_steps": qs.max_steps},
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
