@@ -27,7 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import table, update_section  # noqa: E402
-from interval_compare import read_curve  # noqa: E402
+from interval_compare import interval_table, read_curve  # noqa: E402
 
 from fabmd.engine import Engine  # noqa: E402
 from fabmd.pipeline import run_test  # noqa: E402
@@ -38,12 +38,8 @@ WIDTH_DEG = 5.0
 
 def interval_means(curve: dict, top_deg: float) -> np.ndarray:
     """Mean F_norm [N/m] over each 5° of shear up to ``top_deg``."""
-    g, f = curve["shear_angle_deg"], curve["normalised_force_n_m"]
-    out = []
-    for lo in np.arange(0.0, top_deg, WIDTH_DEG):
-        inside = (g >= lo) & (g < lo + WIDTH_DEG)
-        out.append(float(np.mean(f[inside])) if inside.any() else np.nan)
-    return np.array(out)
+    rows = interval_table([("", curve)], WIDTH_DEG, top_deg)
+    return np.array([1e3 * row["runs"][0]["force_n_mm"] for row in rows])
 
 
 def run_or_read(scene, test: str, folder: Path, crimped: Path | None, engine: Engine,

@@ -218,13 +218,13 @@ def settle_force_n(model: BeadModel, targets_n: dict[str, float]) -> float:
     return float(min(out))
 
 
-def _stage(crimp, fams, expansion: dict[str, float], settle: float | None = None):
+def _stage(crimp, fams, expansion: dict[str, float], settle: float):
     """One run of the search: the tension families at ``expansion``, their "auto" bound
     (kept by the search) taken out of the crimp targets, judged at rest against
     ``settle`` (N per virtual fibre)."""
     return dataclasses.replace(
         crimp, target_tension=None, expansion={**crimp.expansion, **expansion},
-        settle_force_n=settle if settle is not None else crimp.settle_force_n,
+        settle_force_n=settle,
         target_crimp_pct={f: v for f, v in crimp.target_crimp_pct.items() if f not in fams})
 
 
