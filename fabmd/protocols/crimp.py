@@ -285,14 +285,14 @@ class Crimp:
 
     def reference_force_n(self, model: BeadModel) -> float:
         """The relaxation's quasi-static reference force [N] (``settle_force_n``, else the
-        shrink's)."""
+        force at :data:`SETTLE_STRAIN` of the stiffest fibre bond)."""
         if self.settle_force_n is not None:
             return float(self.settle_force_n)
         # no force stated: the force at 0.1 % fibre strain. The shrink's |expansion|·E·A
         # is tens of times the tension a woven fabric keeps: judged against it, the 3D
         # example's crimp stopped with its kinetic energy 5 % of its bonds' energy and
-        # thinned 6.18 -> 5.4 mm once run on (benchmarks/RESULTS.md "A crimp with a
-        # stated shrink judged at rest")
+        # reported 3.0 N per binder, 0.12 N at rest (benchmarks/RESULTS.md "A crimp with
+        # a stated shrink judged at rest")
         return SETTLE_STRAIN * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
 
     def reference_energy_j(self, model: BeadModel) -> float:
