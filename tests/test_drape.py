@@ -250,13 +250,13 @@ def test_blank_holder_force_holds_its_set_value(small_blank, tmp_path):
 
 
 @pytest.mark.lammps
-@pytest.mark.lammps
 def test_inprocess_drape_is_the_standalone_run(small_blank, tmp_path):
     """The in-process engine runs the drape's input in chunks (here of 20 steps, the
     adaptive punch's output interval); its curve is the one ``lmp -in`` makes of the same
     run folder. A set-up at every chunk (as before 2026-12-06) reset the moving punch's
-    velocity, which LAMMPS takes from its travel over the last step: the punch stood still
-    for a step every chunk and its force read 2-6x the standalone run's below 2 mm."""
+    velocity, which LAMMPS takes from its travel over the last step: the punch met the
+    fabric as if at rest in one force evaluation per chunk and its force read 2-6x the
+    standalone run's below 2 mm."""
     from fabmd.engine import Engine
     from fabmd.scene.adaptive import AdaptiveLoading
     from fabmd.scene.outputs import TrajectoryOutput
@@ -272,6 +272,7 @@ def test_inprocess_drape_is_the_standalone_run(small_blank, tmp_path):
     assert np.abs(a["punch_force_n"] - b["punch_force_n"]).max() <= 1e-6 * peak
 
 
+@pytest.mark.lammps
 @pytest.mark.filterwarnings("ignore::fabmd.errors.QuasiStaticWarning")
 def test_adaptive_punch_reaches_its_depth_and_follows_the_fixed_run(small_blank, tmp_path):
     """The adaptive punch travels the depth (halted at its travel, the speed history in the
@@ -279,8 +280,8 @@ def test_adaptive_punch_reaches_its_depth_and_follows_the_fixed_run(small_blank,
     punch sped up in its free travel reached the blank at 4x its base speed), and its
     force follows the fixed-speed run's. Measured 2026-12-06: work to 3 mm -0.1 %, force
     at 2 / 3 mm +4.8 / -4.3 %. (Before the in-process chunks stopped being set up anew,
-    each set-up stopped the punch for a step, 8x as often in the adaptive run, whose
-    output interval is shorter: its work read +29 ... +42 % of the fixed run's.)"""
+    each set-up met the fabric with the punch at rest, 8x as often in the adaptive run,
+    whose output interval is shorter: its work read +29 ... +42 % of the fixed run's.)"""
     from fabmd.engine import Engine
     from fabmd.scene.adaptive import AdaptiveLoading
     from fabmd.scene.outputs import TrajectoryOutput

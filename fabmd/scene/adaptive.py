@@ -177,7 +177,7 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
                    power_floor_w: float, displacement: str = "u",
                    kinetic: tuple[str, str] | None = None,
                    memory_s: float | None = None,
-                   cap: tuple[str, str] | None = None) -> str:
+                   gate: tuple[str, str] | None = None) -> str:
     """The LAMMPS text of the adaptive speed (``lammps_templates/adaptive_speed.lmp``):
     it defines ``v_adapt_factor`` (the speed factor) and the halt at the travel; put it
     after the driven outputs (it reads ``external_ref``, ``v_p_damp``, ``c_ke_free``,
@@ -197,9 +197,10 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
             gives its inertial force over the punch force instead).
         memory_s: the time over which the drag's share is also averaged [s]; default the
             drag time τ (a fabric the drag held back lags for about τ).
-        cap: (LAMMPS formula, why) of the upper bound of ln(factor) when it is not always
-            ln ``max_speed_factor`` (a drape's punch keeps its base speed until it carries
-            force: faster in its free travel, it would reach the blank moving).
+        gate: (LAMMPS variable, what it is) that is 1 where the speed may rise above its
+            base and 0 where it may not (the upper bound of ln(factor) is ln
+            ``max_speed_factor`` times it; a drape's punch keeps its base speed until it
+            carries force: faster in its free travel, it would reach the blank moving).
     """
     x = plan.extra
     interval = x["control_interval_steps"]
@@ -210,10 +211,11 @@ def speed_commands(plan: RunPlan, external_ref: str, energy_floor_j: float,
         power_floor_w = x["floor_force_n"] * plan.speed_m_s
     memory = max(1, math.ceil((memory_s or plan.damping_time_s) / (interval * plan.time_step_s)
                               - 1e-9))
-    ln_max = math.log(x["max_speed_factor"])
+    ln_max = fmt(math.log(x["max_speed_factor"]))
     return render("adaptive_speed", interval=interval, every=plan.every, memory=memory,
-                  ln_cap=cap[0] if cap else fmt(ln_max),
-                  ln_cap_why=cap[1] if cap else f"ln {x['max_speed_factor']:g}",
+                  ln_cap=f"{ln_max}*{gate[0]}" if gate else ln_max,
+                  ln_cap_why=f"ln {x['max_speed_factor']:g}" + (f", times {gate[1]}" if gate
+                                                               else ""),
                   max_factor=x["max_speed_factor"],
                   ln_min=math.log(x["min_speed_factor"]), min_factor=x["min_speed_factor"],
                   sample_every=sample, samples=interval // sample,

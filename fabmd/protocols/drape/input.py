@@ -5,7 +5,6 @@ the numbers of a :class:`~fabmd.protocols.drape.Drape` on its blank (SI units th
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -102,13 +101,11 @@ def adaptive_motion(test: Drape, model: BeadModel, g: DrapeGeometry) -> tuple[st
         memory_s=plan.duration_s / 10,
         # before the punch carries force the drag share and inertia say nothing of the
         # blank: free to speed up there, the punch reached the blank at 4x its base speed
-        # (the test's work to 3 mm +29 / +34 % of the fixed run's, measured 2026-12-06)
-        cap=("v_adapt_punch_cap", "0 (the base speed) until the punch carries the floor "
-             "force, then ln of the largest factor"))
+        gate=("v_adapt_punch_engaged", "1 once the punch carries the floor force (before: "
+              "the base speed)"))
     # the interval is a multiple of SAMPLE_EVERY (Drape.plan_loading)
     text = render("drape_adaptive", interval=interval, interval_s=interval * plan.time_step_s,
                   floor_force=floor_force, sample_every=SAMPLE_EVERY,
-                  ln_max=math.log(plan.extra["max_speed_factor"]),
                   copy_alpha=1.0 / (interval * plan.time_step_s),
                   samples=interval // SAMPLE_EVERY, speed=speed)
     return "v_punch_travel_int", f"({load.lammps_velocity()})*v_adapt_factor", text
