@@ -79,7 +79,8 @@ class Crimp:
         target_tension: the yarn tension the crimped fabric should carry, per family
             (``{"warp": "1 cN/tex", "weft": "4 N"}``) or one for all: N per yarn or
             cN/tex; the expansion of those families is then searched for it
-            (:mod:`fabmd.protocols.crimp_tension`; ``expansion`` is the start). None:
+            (:mod:`fabmd.protocols.crimp_tension`; ``expansion`` is the start; a root
+            that 0.1 % more shrink slackens is passed for the one past the snap). None:
             the expansion as given, whatever tension it leaves (reported either way).
         target_crimp_pct: the crimp [%] per family the crimped fabric should have, its
             expansion then derived from the loose geometry (1 + c)/(1 + c0) − 1
