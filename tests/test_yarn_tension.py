@@ -166,9 +166,9 @@ def snapping_cell(expansion: float) -> float:
     return TARGET_N * (shrink - 0.06) / 0.0082
 
 
-def fake_crimp_runs(monkeypatch, response):
-    """Crimp runs replaced by ``response(expansion) -> yarn tension [N]``; returns the
-    expansions run."""
+def fake_crimp_runs(monkeypatch, response, thickness=None):
+    """Crimp runs replaced by ``response(expansion) -> yarn tension [N]`` (and
+    ``thickness(expansion) -> m``, where given); returns the expansions run."""
     from types import SimpleNamespace
 
     runs = []
@@ -179,6 +179,7 @@ def fake_crimp_runs(monkeypatch, response):
         out.mkdir(parents=True, exist_ok=True)
         return SimpleNamespace(run_dir=out, summary={
             "expansion": dict(self.expansion),
+            "crimped": {"thickness_m": thickness(e) if thickness else None},
             "yarn_tension": {"warp": {"yarn_n": response(e)}}})
 
     monkeypatch.setattr(Crimp, "run", run)
@@ -206,6 +207,12 @@ def test_target_tension_is_found_past_a_snap(tmp_path, monkeypatch):
 #: the first two points are made up (the cell is slack when loose)
 DIPPING_CELL = [(0.0, 0.0), (0.040, 4.0), (0.0443, 6.10), (0.0450, 4.96), (0.0460, 5.45),
                 (0.0470, 8.9), (0.0480, 16.6)]
+
+
+def dipping_cell_thickness(expansion: float) -> float:
+    """Thickness [m] of that cell: 0.81 mm at -4.43 %, thinner by 40 µm per 0.1 % of
+    shrink (its thickness falls steadily while its tension dips)."""
+    return 0.81e-3 - 0.04 * (-expansion - 0.0443)
 
 
 def example_yarn_stiffness(monkeypatch) -> None:
@@ -261,7 +268,7 @@ def test_a_root_on_a_rising_branch_is_taken_after_one_probe(tmp_path, monkeypatc
 
     from fabmd.protocols.crimp_tension import crimp_to_tension
 
-    runs = fake_crimp_runs(monkeypatch, dipping_cell)
+    runs = fake_crimp_runs(monkeypatch, dipping_cell, dipping_cell_thickness)
     example_yarn_stiffness(monkeypatch)
     crimp = Crimp(expansion={"warp": -0.068}, target_tension="6 N")
     with warnings_module.catch_warnings():
@@ -273,6 +280,28 @@ def test_a_root_on_a_rising_branch_is_taken_after_one_probe(tmp_path, monkeypatc
     assert 0.0455 < -result.summary["expansion"]["warp"] < 0.047
     assert sum("probe_of" in r for r in search["runs"]) == 1
     assert len(runs) == len(search["runs"])
+    # steep there: the 5 % tolerance leaves the thickness open by under 2 % (no warning)
+    assert 0 < search["thickness_spread_m"] < 0.02 * dipping_cell_thickness(-0.046)
+
+
+def test_a_root_on_a_tension_plateau_is_warned_about(tmp_path, monkeypatch):
+    """Where the tension rises slowly with the shrink (500 N per unit strain, 6 N at
+    -4.3 %) while the cell thins fast (50 mm per unit strain, as the example's s/d 0.25
+    cell drawn 0.622 mm), the 5 % tolerance spans 0.12 % of shrink and 0.06 mm of
+    thickness: the crimp reaches its target and warns that the state is pinned loosely."""
+    from fabmd.protocols.crimp_tension import crimp_to_tension
+
+    fake_crimp_runs(monkeypatch, lambda e: 6.0 + 500.0 * (-e - 0.043),
+                    lambda e: 0.86e-3 - 0.05 * (-e - 0.043))
+    crimp = Crimp(expansion={"warp": -0.043}, target_tension="6 N")
+    with pytest.warns(UserWarning, match="pins the fabric's state only loosely") as caught:
+        result = crimp_to_tension(crimp, parallel_fibres(diameter_m=DIAMETER),
+                                  tmp_path / "c")
+    search = result.summary["tension_search"]
+    assert search["reached"] and search["rejected_roots"] == []
+    # 0.05 m per unit strain x 2 x 0.05 x 6 N / 500 N per unit strain
+    assert search["thickness_spread_m"] == pytest.approx(6.0e-5, rel=1e-6)
+    assert "0.060 mm (7.0 %)" in str(caught[0].message)
 
 
 def test_target_tension_without_a_crossing_is_refused_with_the_numbers(tmp_path,

@@ -26,8 +26,15 @@ snap — so the search goes on from the probe into more shrink, lists the root i
 than one root. The example's cell at 1 cN/tex has a thick root at s/d 0.5 and 0.25 that is
 gone at s/d 0.125 (the most its search saw before the snap was 0.78 cN/tex) and a flat
 one at all three whose shear converges (benchmarks/RESULTS.md "One drawing at three bead
-spacings, and the crimp's two states"): the root past the last snap is the one a refinement
-keeps. A probe costs one crimp run per root met. Where no crossing exists — the expansion
+spacings, and the crimp's two states"). The probe sees only a fall within 0.1 % of shrink:
+it does not make the state unique — where the tension lingers near the target over a range
+of shrink while the fabric thins (the example at s/d 0.25 drawn 0.64 mm: 6.0–7.0 N from
+−4.55 to −4.69 % while 0.864 → 0.785 mm thick), a root on a rising stretch of it is taken
+(RESULTS "The tension search takes the root past the snap"). The probe's slopes say how
+loosely the target pins the state: over the shrink in which the tension stays within
+tolerance the thickness moves by ``tension_search.thickness_spread_m``, and a spread over
+2 % of the thickness (:data:`THICKNESS_SPREAD`) is warned about — state the thickness
+instead. A probe costs one crimp run per root met. Where no crossing exists — the expansion
 limit reached on the same side of the target, or the tension jumping across it between two
 expansions closer than 2e-5 — the crimp raises
 :class:`~fabmd.errors.CalibrationNotReached` naming the family's expansion, the target,
@@ -154,7 +161,7 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
         tried.append(entry)
         in_folder = (entry, result)
         if entry["largest_relative_error"] <= tolerance:
-            falling = _probe(entry, stage, model, engine, fams, targets, tried)
+            falling = _probe(entry, stage, model, engine, fams, targets, tried, tolerance)
             if not falling:
                 break
             for f in falling:  # a metastable root: search on past its probe
@@ -190,7 +197,9 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     search = {"targets_n": targets, "tolerance": tolerance, "runs": tried,
               "reached": reached, "shrink_bound": bound or None,
               "at_bound": at_bound, "probe_strain": PROBE_STRAIN,
-              "rejected_roots": [_root_record(t) for t in runs if t.get("rejected")]}
+              "rejected_roots": [_root_record(t) for t in runs if t.get("rejected")],
+              # the thickness the tolerance leaves open at the answer (its probe's slopes)
+              "thickness_spread_m": (chosen.get("probe") or {}).get("thickness_spread_m")}
     if refused:
         search["reason"] = "; ".join(refused)
     result = in_folder[1]
@@ -207,6 +216,9 @@ def crimp_to_tension(crimp, model: BeadModel, out: Path | None, engine=None,
     if search["rejected_roots"] and not quiet and mpi.is_root():
         warnings.warn(_two_roots_message(search["rejected_roots"], chosen, reached),
                       stacklevel=3)
+    loose = _loose_pin_message(chosen, tolerance) if reached else None
+    if loose and not quiet and mpi.is_root():
+        warnings.warn(loose, stacklevel=3)
     if refused:
         raise CalibrationNotReached(f"crimp: {search['reason']} (the crimp folder holds "
                                     f"the closest run, {100 * error:.1f} % off)",
@@ -238,14 +250,15 @@ def _sample(result, expansion: dict[str, float], fams, targets: dict[str, float]
             "largest_relative_error": max(abs(got[f] / targets[f] - 1) for f in fams)}
 
 
-def _probe(root: dict, stage, model: BeadModel, engine, fams, targets, tried) -> list[str]:
+def _probe(root: dict, stage, model: BeadModel, engine, fams, targets, tried,
+           tolerance: float) -> list[str]:
     """Crimp once more with :data:`PROBE_STRAIN` more shrink than ``root`` (a run within
     tolerance), in a temporary folder; returns the families whose tension fell there (by
     more than :data:`PROBE_NOISE`): for them ``root`` lies on a branch that more shrink
     slackens — the fabric is about to snap into a flatter state, and the same tension is
     met again past the snap. Such a root is metastable: at 1 cN/tex the example's thick
-    state exists at s/d 0.5 and 0.25 but not at 0.125 (its tension peaks at 0.78 cN/tex
-    there), while the flat one exists at all three and converges (RESULTS, as above)."""
+    state (drawn 0.621 mm) exists at s/d 0.5 and 0.25 but not at 0.125 (the most its
+    search saw before the snap was 0.78 cN/tex), while the flat one exists at all three."""
     from ..results.folder import prepare_run_folder
 
     expansion = {f: root["expansion"][f] - PROBE_STRAIN for f in fams}
@@ -262,12 +275,61 @@ def _probe(root: dict, stage, model: BeadModel, engine, fams, targets, tried) ->
     entry["probe_of"] = len(tried) - 1
     tried.append(entry)
     root["probe"] = {"expansion": expansion, "yarn_tension_n": entry["yarn_tension_n"],
-                     "thickness_m": entry["thickness_m"]}
+                     "thickness_m": entry["thickness_m"],
+                     "thickness_spread_m": thickness_spread_m(root, entry, fams, targets,
+                                                              tolerance)}
     falling = [f for f in fams
                if entry["yarn_tension_n"][f] < (1 - PROBE_NOISE) * root["yarn_tension_n"][f]]
     if falling:
         root["rejected"] = falling
     return falling
+
+
+def thickness_spread_m(root: dict, probe: dict, fams, targets: dict[str, float],
+                       tolerance: float) -> float | None:
+    """How much thickness [m] the tension target leaves open at ``root``: over the shrink
+    in which a family's tension stays within ``tolerance`` of its target (2·tol·T over
+    the slope dT/dε that the ``probe``, :data:`PROBE_STRAIN` further, measured) the
+    thickness moves by its own slope dh/dε; the largest over ``fams``. None where a
+    thickness is not known or the tension did not rise."""
+    if root["thickness_m"] is None or probe["thickness_m"] is None:
+        return None
+    dh = abs(probe["thickness_m"] - root["thickness_m"]) / PROBE_STRAIN
+    spreads = []
+    for f in fams:
+        slope = (probe["yarn_tension_n"][f] - root["yarn_tension_n"][f]) / PROBE_STRAIN
+        if slope > 0:
+            spreads.append(dh * 2 * tolerance * targets[f] / slope)
+    return max(spreads) if spreads else None
+
+
+#: a root whose tension tolerance leaves the thickness open by more than this share of it
+#: is warned about: the example's roots on steep branches leave 0.01-1.2 % (the 3D
+#: example's binders 0.3 %), two on the plateau of its s/d 0.25 cell drawn 0.64 and
+#: 0.622 mm 3.8 and 7.5 % (RESULTS "The tension search takes the root past the snap")
+THICKNESS_SPREAD = 0.02
+
+
+def _loose_pin_message(chosen: dict, tolerance: float) -> str | None:
+    """The warning that the tension target pins the thickness only loosely (or None)."""
+    probe = chosen.get("probe") or {}
+    spread = probe.get("thickness_spread_m")
+    if spread is None or not spread > THICKNESS_SPREAD * chosen["thickness_m"]:
+        return None
+    return (f"crimp: the target tension pins the fabric's state only loosely: here "
+            f"{PROBE_STRAIN:.0e} more shrink changes the tension by "
+            f"{_n_change(chosen, probe)} while the cell thins from "
+            f"{_mm(chosen['thickness_m'])} to {_mm(probe['thickness_m'])}, so within the "
+            f"{100 * tolerance:g} % tolerance the thickness is open by about "
+            f"{1e3 * spread:.3f} mm ({100 * spread / chosen['thickness_m']:.1f} %): another "
+            f"start of the search can end elsewhere. State the thickness instead (fabmd "
+            f"calibrate, [calibrate] thickness_m) or give a tighter tolerance; "
+            f"summary.json tension_search.thickness_spread_m")
+
+
+def _n_change(root: dict, probe: dict) -> str:
+    return ", ".join(f"{probe['yarn_tension_n'][f] - t:+.3g} N ({f})"
+                     for f, t in root["yarn_tension_n"].items())
 
 
 def _root_record(run: dict) -> dict:
