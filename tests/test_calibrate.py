@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import tomllib
 
+import numpy as np
 import pytest
 
 from fabmd.errors import CalibrationNotReached, InputError
@@ -158,6 +159,47 @@ def test_search_reports_a_jump_across_the_target():
     knob = thickness_knob(1.05e-3)
     runs, why = drive(knob, lambda s: 1.0e-3 if s < -0.02 else 1.1e-3, runs=20)
     assert "jumps from" in why and "no strain in between" in why
+
+
+def test_a_jump_beside_a_bracket_is_passed_over():
+    """The example's cell drawn 0.621 mm (s/d 0.5) against its shrink: it thins steadily,
+    then jumps thicker again past -5.4 % (measured). The target 0.70 mm lies in the jump
+    and, further back, between -4.43 and -5.08 %: the search must go there, not stop at
+    the jump beside its best sample."""
+    measured = [(-0.0612, 0.8618e-3), (-0.0559, 0.8626e-3), (-0.0540, 0.6404e-3),
+                (-0.0508, 0.6279e-3), (-0.0443, 0.8095e-3)]
+
+    def cell(s):  # piecewise linear through the measured points, the jump at -5.5 %
+        if s < -0.055:
+            return 0.8626e-3
+        xs, ys = zip(*measured[2:], strict=True)
+        return float(np.interp(s, xs, ys))
+
+    knob = thickness_knob(0.70e-3, start=-0.0443)
+    for s in (-0.0443, -0.0612, -0.0508, -0.0540, -0.0559):  # the measured run's order
+        knob.samples.append((s, cell(s), ()))
+    knob.value = -0.0559
+    new, why = next_strain(knob)  # the bracket where the cell thins with the shrink
+    assert why == "" and -0.0508 < new < -0.0443, (new, why)
+    runs, why = drive(knob, cell, runs=12)
+    assert why == "", why
+    assert -0.0508 < knob.samples[-1][0] < -0.0443
+    assert cell(knob.samples[-1][0]) == pytest.approx(0.70e-3, rel=0.01)
+
+
+def test_a_steep_bracket_is_bisected_not_called_a_jump():
+    """The same cell at s/d 0.25 thins 0.774 -> 0.619 mm between -4.43 and -4.59 %
+    (measured; 0.697 mm at -4.53 %): a bracket 0.16 % wide that holds the target 0.70 mm,
+    reached by halving it, not refused as a jump (it was, with 2e-3 as the jump width)."""
+    measured = [(-0.0459, 0.6192e-3), (-0.0453, 0.697e-3), (-0.0443, 0.7744e-3)]
+    xs, ys = zip(*measured, strict=True)
+    knob = thickness_knob(0.70e-3, start=-0.0443)
+    for s in (-0.0443, -0.0459):
+        knob.samples.append((s, float(np.interp(s, xs, ys)), ()))
+    knob.value = -0.0459
+    runs, why = drive(knob, lambda s: float(np.interp(s, xs, ys)), runs=8)
+    assert why == "", why
+    assert knob.samples[-1][1] == pytest.approx(0.70e-3, rel=0.01)
 
 
 def test_a_stiff_tension_is_refined_not_called_a_jump():

@@ -47,12 +47,14 @@ in the direction the quantity should move (thickness falls with the shrink, crim
 with the expansion, tension falls with it); then secant steps from the best sample
 outwards; once two neighbouring samples lie on both sides of the target, false position
 kept inside the bracket (never within a fifth of its width of an end, so the bracket
-shrinks every run). A response that **turns** (the best sample has worse ones on both
-sides: e.g. one-row yarns that get thicker again with more shrink) is searched for its
-turning point by golden-section steps; if the turning value misses the target, the knob
-is stopped with the range tried, the best value and where the response turned. A knob
-stuck at its strain limit (a shrink at most the family's loose crimp: more pulls the
-yarns straight, not woven; ``strain_range`` overrides) is stopped likewise.
+shrinks every run; halved where narrower than 2e-3; of several brackets first one across
+which the quantity moves the way it should; a jump only under 1e-4). A response that
+**turns** (the best sample has worse ones on both sides: e.g. one-row yarns that get
+thicker again with more shrink) is searched for its turning point by golden-section
+steps; if the turning value misses the target, the knob is stopped with the range tried,
+the best value and where the response turned. A knob stuck at its strain limit (a shrink
+at most the family's loose crimp: more pulls the yarns straight, not woven;
+``strain_range`` overrides) is stopped likewise.
 
 **Several knobs** move each other's quantities (in the test cell the weft shrink that sets
 the weft tension also thickens the fabric, and more warp shrink made it thicker, not

@@ -14,9 +14,14 @@ from dataclasses import dataclass, field
 STRAIN_LIMIT = 0.4
 #: strains are tried on this grid (so that the scene file gets short, exact numbers)
 STRAIN_RESOLUTION = 1e-5
-#: a bracket or a turn narrower than this (in strain) is not refined further: thickness
-#: and crimp move by a fraction of a per cent over it
+#: a turn narrower than this (in strain) is not refined further; a bracket narrower than
+#: this is bisected (not false position: the response may be a snap inside it)
 MIN_STRAIN_WIDTH = 2e-3
+#: a bracket narrower than this is a jump across the target, not refined further. Not
+#: 2e-3: the example's cell (drawn 0.621 mm, s/d 0.25) thins 0.774 -> 0.619 mm between
+#: -4.43 and -4.59 % of shrink, steeply but continuously (0.697 mm at -4.53 %); 1e-4 of
+#: strain moves that by 0.01 mm, about the 1 % tolerance
+MIN_JUMP_WIDTH = 1e-4
 #: the same for a yarn tension, which follows the fibres' own strain: E·A × 2e-3 is about
 #: 4× a 1 cN/tex weaving tension on glass, so a bracket that narrow is no jump — it is
 #: refined to a few grid steps (:data:`STRAIN_RESOLUTION`)
@@ -51,6 +56,12 @@ class Knob:
     samples: list = field(default_factory=list)  # (strain, quantity, other knobs' strains)
     verdict: str = ""  # "" searching, "reached", or why it stopped
     acts_on: str = "expansion"
+
+    @property
+    def min_jump_width(self) -> float:
+        """Narrowest bracket refined further [strain]: :data:`MIN_JUMP_WIDTH`,
+        :data:`MIN_TENSION_STRAIN_WIDTH` for a tension."""
+        return MIN_TENSION_STRAIN_WIDTH if self.kind == "tension" else MIN_JUMP_WIDTH
 
     @property
     def min_width(self) -> float:
@@ -143,22 +154,36 @@ class Seen:
 
 
 def _in_bracket(seen: Seen) -> tuple[float | None, str] | None:
-    """Two neighbouring samples on both sides of the target (the pair nearest the best):
-    false position kept inside the bracket, or (None, why) where the bracket is narrower
-    than the knob's :attr:`Knob.min_width` (the response jumps across the target)."""
+    """Two neighbouring samples on both sides of the target (the pair nearest the best
+    that is still wide enough to refine): false position kept inside the bracket, or
+    (None, why) where every bracket is narrower than the knob's
+    :attr:`Knob.min_jump_width` (the response jumps across the target); a bracket narrower
+    than :attr:`Knob.min_width` is bisected. A bracket across which the quantity moves the
+    way the knob's ``sign`` says comes first. A jump beside another bracket is passed over:
+    the example's cell drawn 0.621 mm at s/d 0.5 thins to 0.628 / 0.640 mm at −5.08 /
+    −5.40 % and jumps back to 0.863 mm at −5.59 %; 0.70 mm lies in the jump and between
+    −4.43 % (0.810 mm) and −5.08 % (benchmarks/RESULTS.md "The tension search takes the
+    root past the snap")."""
     knob, pts, err, best = seen.knob, seen.pts, seen.err, seen.best
     brackets = [i for i in range(len(pts) - 1) if err[i] * err[i + 1] < 0]
     if not brackets:
         return None
-    i = min(brackets, key=lambda j: min(abs(j - best), abs(j + 1 - best)))
+    wide = [j for j in brackets if pts[j + 1][0] - pts[j][0] >= knob.min_jump_width]
+    # of those, one where the quantity moves the way the physics says (thickness falls
+    # with the shrink): the other side of a jump back is not where the target is sought
+    usual = [j for j in wide if (pts[j + 1][1] - pts[j][1]) * knob.sign > 0]
+    i = min(usual or wide or brackets,
+            key=lambda j: min(abs(j - best), abs(j + 1 - best)))
     (s0, q0), (s1, q1) = pts[i], pts[i + 1]
     e0, e1 = err[i], err[i + 1]
     width = s1 - s0
-    if width < knob.min_width:
+    if width < knob.min_jump_width:
         return None, (f"{knob.name}: the response jumps from {knob.text(q0)} at "
                       f"{s0:+.4f} to {knob.text(q1)} at {s1:+.4f}, across the target "
                       f"{knob.text(knob.target)}: no strain in between reaches it within "
                       f"± {knob.text(knob.tolerance)} ({seen.tried})")
+    if width < knob.min_width:  # steep or a snap inside: halve it
+        return on_grid(0.5 * (s0 + s1)), ""
     return on_grid(inside_bracket(s0, e0, s1, e1)), ""
 
 
