@@ -81,14 +81,13 @@ def export_state(model, out: Path, voxels: int | None = None,
     t1 = time.perf_counter()
     mesh = voxelise(yarns, grid, samples=samples or 1)
     vf_beads = bead_fibre_volume_fraction(model, grid)
-    centre_error = None
+    centre_error = None  # the centres' miss, where it made the grid be sampled again
     if samples is None:
-        centre_error = mesh.cell_fibre_volume_fraction() / vf_beads - 1.0
-        if abs(centre_error) > VOLUME_FRACTION_TOLERANCE:  # thin yarns: sample inside
-            mesh = voxelise(yarns, grid, samples=2)
-        else:
-            centre_error = None
-    samples = samples or (1 if centre_error is None else 2)
+        samples = 1
+        miss = mesh.cell_fibre_volume_fraction() / vf_beads - 1.0
+        if abs(miss) > VOLUME_FRACTION_TOLERANCE:  # thin yarns: sample inside the voxels
+            samples, centre_error = 2, miss
+            mesh = voxelise(yarns, grid, samples=samples)
     out.mkdir(parents=True, exist_ok=True)
     t2 = time.perf_counter()
     write_vtu(mesh, out / f"{stem}.vtu")
