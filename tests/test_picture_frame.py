@@ -194,6 +194,11 @@ def test_force_stays_low_then_locks(frictional):
     assert len(fibre["steps"]) >= 10
     at = np.asarray(fibre["kinematic_deg"]) < 40
     assert np.max(np.abs(np.subtract(fibre["fibres_deg"], fibre["kinematic_deg"]))[at]) < 5
+    # the centre's and the clamps' band's thickness on every frame: one fabric at the start
+    zones = s["zone_thickness"]
+    assert len(zones["centre_m"]) == len(zones["edge_m"]) == len(fibre["steps"])
+    assert zones["centre_m"][0] == pytest.approx(zones["edge_m"][0], rel=0.1)
+    assert set(zones["at_angle"]) == {"10", "20", "30", "40"}
 
 
 @pytest.mark.lammps
@@ -308,3 +313,25 @@ def test_mounting_slack_lengthens_only_the_unclamped_fibres():
     r0 = prepared.bond_type_table[new_types[0] - 1].rest_length_m
     assert f"{r0 * 1.01:.10g}" in text  # the longer rest length is kept for the test
     assert f"{r0:.10g}*(1+0.01*ramp(0,1))" in text  # ramped up from the cut length
+
+
+def test_zone_thickness_reads_each_zone_and_the_edge_excess():
+    """Beads of a 10 mm free square: the centre 0.2 mm deep, the band 0.3 mm; then a frame
+    whose band thickens by 0.05 / 0.1 mm and centre by 0.01 / 0.02 mm at 20 / 40 deg."""
+    from fabmd.results.zone_thickness import zone_masks, zone_summary, zone_thickness_m
+
+    rng = np.random.default_rng(1)
+    xy = rng.uniform(-6e-3, 6e-3, (20000, 2))  # 1 mm of clamps around the free square
+    centre_zone, band = zone_masks(xy, (-5e-3, 5e-3, -5e-3, 5e-3), (0.0, 0.0))
+    assert np.all(np.abs(xy[centre_zone]) <= 2.5e-3)
+    assert np.all(np.abs(xy[band]).max(axis=1) > 2.5e-3)
+    assert np.all(np.abs(xy[band]) <= 5e-3)
+    z = np.where(centre_zone, rng.uniform(0, 0.2e-3, len(xy)), rng.uniform(0, 0.3e-3, len(xy)))
+    d = 0.1e-3
+    h_centre = zone_thickness_m(z[centre_zone], d)
+    assert h_centre == pytest.approx(0.2e-3 * 0.98 + d, rel=0.01)  # 1-99 % of the spread
+    assert zone_thickness_m(z[band], d) == pytest.approx(0.3e-3 * 0.98 + d, rel=0.01)
+    block = zone_summary([0.0, 20.0, 40.0], [0.3e-3, 0.31e-3, 0.32e-3], [0.3e-3, 0.35e-3, 0.4e-3])
+    assert block["at_angle"]["20"]["edge_excess"] == pytest.approx((0.05 - 0.01) / 0.3)
+    assert block["at_angle"]["10"]["edge_m"] == pytest.approx(0.325e-3)  # interpolated
+    assert "30" in block["at_angle"] and "50" not in block["at_angle"]

@@ -56,6 +56,7 @@ from ..model.beads import model_bead_parameters
 from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..results.figure import report_marks
+from ..results.zone_thickness import frame_zone_thickness, zone_summary
 from ..scene import blocks
 from ..scene.adaptive import (
     AdaptiveLoading,
@@ -162,8 +163,9 @@ class PictureFrame(ClampedTest):
     corner's (default 1e-3: on the example coupon halving it changes the curve by
     < 0.1 %); the affine drag field is the frame's, so the drag does not add to the frame
     force (``"absolute"``, the old ``fix viscous``, does); the fibre shear angle of the
-    central zone is measured on the trajectory frames (``TrajectoryOutput(frames=0)``:
-    none written, none measured).
+    central zone, and the thickness of that zone and of the band next to the clamps
+    (``zone_thickness``, :mod:`fabmd.results.zone_thickness`), are measured on the
+    trajectory frames (``TrajectoryOutput(frames=0)``: none written, none measured).
 
     Args:
         max_shear_angle_deg: shear angle at the end of the test [deg], (0, 80].
@@ -467,6 +469,11 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
     steps, fibre_gamma = fibre_shear_angles(run_dir, g.centre,
                                             (g.free_side_m / 4, g.free_side_m / 4))
     kinematic = np.interp(steps, out["step"], gamma) if len(steps) else np.zeros(0)
+    # the clamps compact the yarns next to them: the band there thickens beyond the centre
+    zones = frame_zone_thickness(run_dir, g.inner, g.centre)
+    zone_block = (zone_summary(np.interp(zones["step"], out["step"], gamma),
+                               zones["centre_m"], zones["edge_m"])
+                  if len(zones["step"]) else None)
     summary = {
         "protocol": PROTOCOL,
         "n_beads": model.n_beads,
@@ -501,6 +508,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
             "fibres_deg": fibre_gamma.tolist(),
             "max_difference_deg": float(np.abs(fibre_gamma - kinematic).max())
             if len(steps) else None},
+        "zone_thickness": zone_block,
         **test.quasi_static_evidence(out, model, d / dmax),
     }
     per = "L_free²" if g.clamp_yarns else "L_fabric²"  # whole-yarn clamps: the free square
