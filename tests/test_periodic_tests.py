@@ -13,6 +13,7 @@ from fabmd.model.beads import Discretisation, bead_parameters
 from fabmd.model.material import VirtualFibre
 from fabmd.protocols.crimp import Crimp
 from fabmd.protocols.periodic import PeriodicShear, PeriodicTension
+from fabmd.results.curves import locking_angle
 from fabmd.results.trajectory import read_tilt
 
 from .fabrics import SOFT_GLASS, parallel_fibres, plain_weave_cell
@@ -94,6 +95,12 @@ def test_woven_cell_in_trellis_shear(woven_cell, tmp_path):
     assert c["shear_angle_deg"][-1] == pytest.approx(45, abs=0.5)
     assert s["initial_shear_stiffness_n_m_per_rad"] > 0
     assert s["locking"]["found"] and s["locking_angle_deg"] < 45
+    # the picture frame's stated method: the same angle wherever the test stops
+    g, f = c["shear_angle_deg"], c["normalised_force_n_m"]
+    cut = [locking_angle(g[g <= a], f[g <= a])["x"] for a in (s["locking"]["final_range"][1] + 0.5,
+                                                             40.0, 45.0)]
+    assert max(cut) - min(cut) < 1e-9 and cut[-1] == pytest.approx(s["locking_angle_deg"])
+    assert s["locking"]["initial_range"] == [10.0, 20.0]
     assert s["energy_balance"]["relative_error"] < 0.05
     assert s["max_kinetic_to_strain_energy"] < 0.05
     # judged per 5 deg of shear, as the picture frame; each sample carries its interval's

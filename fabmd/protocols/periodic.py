@@ -33,7 +33,7 @@ import numpy as np
 from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
-from ..results.curves import bilinear_fit, tangent_intersection, values_at
+from ..results.curves import bilinear_fit, locking_angle, tangent_intersection, values_at
 from ..results.figure import report_marks
 from ..scene.drag import AffineField, affine_force_names
 from ..scene.energy import ContactPower
@@ -235,9 +235,16 @@ class PeriodicShear(_PeriodicCellTest):
     ``speed_fraction`` is that of the turning cell edge (b·γ̇); the trajectory stores the
     box tilt of the sheared cell too.
 
+    The locking angle is read by the picture frame's stated method
+    (:func:`fabmd.results.curves.locking_angle`: departure from the 10–20° line by a
+    factor 2), so the two compare and neither depends on where the test stops.
+
     Args:
         max_shear_angle_deg: shear angle γ at the end [deg], (0, 70].
         report_angles_deg: shear angles at which forces are reported.
+        locking_initial_deg: shear-angle range [deg] of the initial branch of the
+            locking-angle method.
+        locking_factor: the force over the initial line that marks the departure.
     """
 
     protocol = "periodic_shear"
@@ -250,9 +257,16 @@ class PeriodicShear(_PeriodicCellTest):
     max_shear_angle_deg: float = 40.0
     report_angles_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
     speed_fraction: float = 1e-3
+    locking_initial_deg: tuple[float, float] = (10.0, 20.0)
+    locking_factor: float = 2.0
 
     def check_fields(self) -> None:
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
+                        low_open=True)
+        lo, hi = self.locking_initial_deg
+        inputs.in_range("periodic_shear.locking_initial_deg[0]", lo, 0, 70)
+        inputs.in_range("periodic_shear.locking_initial_deg[1]", hi, lo, 70, low_open=True)
+        inputs.in_range("periodic_shear.locking_factor", self.locking_factor, 1, 100,
                         low_open=True)
 
     def travel_m(self, model: BeadModel) -> float:
@@ -274,9 +288,13 @@ class PeriodicShear(_PeriodicCellTest):
         deg = np.degrees(gamma)
         curve = {"time_s": out["time_s"], "shear_angle_deg": deg, "normalised_force_n_m": fnorm,
                  "shear_force_per_length_n_m": out["n_xy_n_m"], **energy_columns(out)}
-        valid = deg > 0.02 * deg.max()
-        lock = tangent_intersection(deg[valid], fnorm[valid])
-        initial = tangent_intersection(gamma[valid], fnorm[valid])["initial_slope"]
+        # the picture frame's method, so the two compare (a tangent over the test's last
+        # part read the same curve 10° later: benchmarks/RESULTS.md "The picture frame's
+        # edges")
+        lock = locking_angle(deg, fnorm, initial_deg=self.locking_initial_deg,
+                             factor=self.locking_factor)
+        initial = (None if lock["initial_slope"] is None
+                   else float(np.degrees(lock["initial_slope"])))  # per radian
         summary = self._common_summary(model, out, deg / self.max_shear_angle_deg, plan)
         summary.update({
             "initial_shear_stiffness_n_m_per_rad": initial,
