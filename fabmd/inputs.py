@@ -75,3 +75,14 @@ def one_of(name: str, value: Any, allowed: Iterable[Any]) -> Any:
         choices = ", ".join(repr(a) for a in allowed)
         raise InputError(f"{name} must be one of {choices}, got {value!r}")
     return value
+
+
+def locking_method(prefix: str, initial_deg, factor: Any, top_deg: float) -> None:
+    """The locking-angle method's settings of a shear test (``prefix``: its table):
+    ``locking_initial_deg`` (lo, hi) within [0, ``top_deg``], lo < hi, and a
+    ``locking_factor`` in (1, 100]."""
+    lo, hi = initial_deg
+    in_range(f"{prefix}.locking_initial_deg[0]", lo, 0, top_deg)
+    in_range(f"{prefix}.locking_initial_deg[1]", hi, lo, top_deg, low_open=True)
+    in_range(f"{prefix}.locking_factor", factor, 1, 100, low_open=True)
+

@@ -65,6 +65,10 @@ def test_only_periodic_cells_are_accepted():
         PeriodicTension(transverse="loose")
     with pytest.raises(InputError, match="max_shear_angle_deg"):
         PeriodicShear(max_shear_angle_deg=80)
+    with pytest.raises(InputError, match=r"periodic_shear.locking_initial_deg\[1\]"):
+        PeriodicShear(locking_initial_deg=(20.0, 10.0))
+    with pytest.raises(InputError, match="periodic_shear.locking_factor"):
+        PeriodicShear(locking_factor=1.0)
 
 
 @pytest.fixture(scope="module")

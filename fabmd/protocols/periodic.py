@@ -263,11 +263,7 @@ class PeriodicShear(_PeriodicCellTest):
     def check_fields(self) -> None:
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
                         low_open=True)
-        lo, hi = self.locking_initial_deg
-        inputs.in_range("periodic_shear.locking_initial_deg[0]", lo, 0, 70)
-        inputs.in_range("periodic_shear.locking_initial_deg[1]", hi, lo, 70, low_open=True)
-        inputs.in_range("periodic_shear.locking_factor", self.locking_factor, 1, 100,
-                        low_open=True)
+        inputs.locking_method("periodic_shear", self.locking_initial_deg, self.locking_factor, 70)
 
     def travel_m(self, model: BeadModel) -> float:
         """Arc the turning edge's end travels, b·γ [m]."""

@@ -223,11 +223,7 @@ class PictureFrame(ClampedTest):
         inputs.positive("picture_frame.pretension_transits", self.pretension_transits)
         for a in self.report_angles_deg:
             inputs.finite("picture_frame.report_angles_deg", a)
-        lo, hi = self.locking_initial_deg
-        inputs.in_range("picture_frame.locking_initial_deg[0]", lo, 0, 80)
-        inputs.in_range("picture_frame.locking_initial_deg[1]", hi, lo, 80, low_open=True)
-        inputs.in_range("picture_frame.locking_factor", self.locking_factor, 1, 100,
-                        low_open=True)
+        inputs.locking_method("picture_frame", self.locking_initial_deg, self.locking_factor, 80)
         if not isinstance(self.loading_speed, AdaptiveLoading):
             raise InputError(f"picture_frame.loading_speed must be an AdaptiveLoading, got "
                              f"{self.loading_speed!r}")
