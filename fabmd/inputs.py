@@ -85,4 +85,3 @@ def locking_method(prefix: str, initial_deg, factor: Any, top_deg: float) -> Non
     in_range(f"{prefix}.locking_initial_deg[0]", lo, 0, top_deg)
     in_range(f"{prefix}.locking_initial_deg[1]", hi, lo, top_deg, low_open=True)
     in_range(f"{prefix}.locking_factor", factor, 1, 100, low_open=True)
-
