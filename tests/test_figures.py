@@ -153,9 +153,13 @@ def test_demo_overview_figure(saved, tmp_path):
     g = np.linspace(0, 50, 50)
     write_csv(tmp_path / "f" / "curve.csv", {"shear_angle_deg": g,
                                              "normalised_force_n_m": np.exp(g / 10)})
+    (tmp_path / "p").mkdir()
+    write_csv(tmp_path / "p" / "curve.csv", {"shear_angle_deg": g,
+                                             "normalised_force_n_m": 0.5 * np.exp(g / 9)})
     _overview(tmp_path, {"results": str(tmp_path / "t"),
                          "test_summary": {"transition_elongation_pct": 1.81}},
-              {"results": str(tmp_path / "f"), "test_summary": {"locking_angle_deg": 40.7}})
+              {"results": str(tmp_path / "f"), "test_summary": {"locking_angle_deg": 40.7}},
+              {"results": str(tmp_path / "p"), "test_summary": {"locking_angle_deg": 35.2}})
     _clean(saved, {"demo.png"})
 
 

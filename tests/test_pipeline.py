@@ -190,6 +190,10 @@ def test_demo_fast_runs_end_to_end(tmp_path):
     out = run_cli("demo", "--fast", "--out", str(tmp_path / "demo"))
     assert out.returncode == 0, out.stderr
     assert "picture frame" in out.stdout and "locking angle" in out.stdout
+    assert "periodic shear (the fabric without clamps" in out.stdout
+    summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
+    assert summary["periodic_shear"]["normalised_force_at_angle_n_m"]
     for name in ("demo.png", "summary.json", "loose/preview.png", "crimp/sections.png",
-                 "tension/tension/curve.png", "picture_frame/picture_frame/curve.png"):
+                 "tension/tension/curve.png", "picture_frame/picture_frame/curve.png",
+                 "periodic_shear/periodic_shear/curve.png"):
         assert (tmp_path / "demo" / name).exists(), name
