@@ -200,7 +200,12 @@ def test_a_tied_group_searches_its_mean_until_every_family_is_met():
     """One loose height for warp and weft: the mean crimp's tolerance shrinks by the
     families' spread, so a mean within 1.5 +- 0.05 % whose warp misses (the example's demo
     on 2 ranks: 1.449 / 1.453 %, mean 1.451 %) is searched further, not taken."""
-    from fabmd.protocols.calibrate import TIED_TOLERANCE_FLOOR, CrimpTargets, _take_samples
+    from fabmd.protocols.calibrate import (
+        TIED_TOLERANCE_FLOOR,
+        CrimpTargets,
+        _take_samples,
+        _tied_reason,
+    )
     from fabmd.protocols.calibrate_search import Knob
 
     targets = CrimpTargets(crimp_pct={"warp": 1.5, "weft": 1.5}, crimp_by="loose_height",
@@ -224,3 +229,12 @@ def test_a_tied_group_searches_its_mean_until_every_family_is_met():
     apart = run(knob(), 1.40, 1.60)
     assert apart.tolerance == pytest.approx(TIED_TOLERANCE_FLOOR * 0.05)
     assert apart.verdict == "reached"
+    # a family's missed crimp names the right cause: the families apart where the mean
+    # was reached, the group's own verdict where it was not (a jump across the target)
+    member = Knob("crimp:warp", "crimp", ("warp",), 1.5, 0.05, +1, (-1.0, 1.0), 0.0,
+                  acts_on="tied_height")
+    assert "the families crimp apart" in _tied_reason(member, [apart])
+    jumped = knob()
+    jumped.verdict = "crimp:warp+weft: the response jumps from 1.278 % to 1.598 %"
+    assert _tied_reason(member, [jumped]).endswith(
+        "whose mean crimp was not reached (crimp:warp+weft above)")

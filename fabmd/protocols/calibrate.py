@@ -552,9 +552,7 @@ def _conclude(knobs: list[Knob], uncontrolled: list[Knob], runs: list[dict], max
                                     "(see the run's crimp/summary.json tension_search)",
                     "reported": "reported, not controlled (the expansions serve the "
                                 "tension, the loose heights the crimp)",
-                    "tied_height": "its loose height is tied to its group's "
-                                   "(tied_heights), whose mean crimp was reached: the "
-                                   "families crimp apart"}[kn.acts_on])
+                    "tied_height": _tied_reason(kn, knobs)}[kn.acts_on])
             if kn.verdict != "met":
                 reasons.append(kn.verdict)
             continue
@@ -626,6 +624,18 @@ def _achieved(result: CrimpResult, pressed, knobs: list[Knob],
         else:
             out[knob.name] = result.summary["yarn_tension"][fam]["yarn_n"]
     return out
+
+
+def _tied_reason(member: Knob, knobs: list[Knob]) -> str:
+    """Why a family of a tied group missed its crimp: the families crimp apart where the
+    group's mean was reached, else the group's own verdict says why."""
+    group = next((kn for kn in knobs if kn.acts_on == "loose_height"
+                  and member.families[0] in kn.families), None)
+    if group is None or group.verdict == "reached":
+        return ("its loose height is tied to its group's (tied_heights), whose mean crimp "
+                "was reached: the families crimp apart")
+    return (f"its loose height is tied to its group's (tied_heights), whose mean crimp "
+            f"was not reached ({group.name} above)")
 
 
 def thickness_under(summary: dict, pressure_pa: float) -> float | None:
