@@ -17,6 +17,8 @@ coupon from it, as ``fabmd test`` does):
 * tension — stiffness before and after the transition (fabmd's bilinear fit) and force
   at 1 / 2 / 3 %, all per unit width in N/mm (so coupon widths compare);
 * picture frame — normalised force at 10 / 20 / 30 / 40° [N/mm] and the locking angle;
+* periodic shear — the same of the crimped cell sheared by its box (no clamps: the
+  frame's large-coupon limit, so no ``cells`` levels);
 * compaction — thickness at 1 / 10 / 100 kPa [mm].
 
 For each refinement the change between its two finest levels (fibres 7 → 19, s/d 0.5
@@ -71,7 +73,9 @@ EXAMPLE = "plain_weave.toml"
 SECTION = "Convergence"
 COMMAND = "python benchmarks/convergence.py --write"
 
-TESTS = ("compaction", "tension", "picture-frame")
+TESTS = ("compaction", "tension", "picture-frame", "periodic-shear")
+#: the tests whose quantities are the normalised shear force and the locking angle
+SHEAR_TESTS = ("picture-frame", "periodic-shear")
 #: refinement -> its levels, coarse to fine
 LEVELS: dict[str, tuple] = {"fibres": (1, 7, 19), "sd": (0.5, 0.25), "cells": (3, 4, 6)}
 #: finer levels run only when asked for by name (``--levels sd=0.125``): stored, not in the
@@ -95,6 +99,7 @@ QUANTITIES = {
                       "locking": ("locking", "°")},
     "compaction": {f"h{p:g}kPa": (f"h {p:g} kPa", "mm") for p in PRESSURES_KPA},
 }
+QUANTITIES["periodic-shear"] = dict(QUANTITIES["picture-frame"])
 
 
 @dataclass(frozen=True)
@@ -146,14 +151,14 @@ def variant(test: str, level: tuple[str, float], base: dict) -> Variant | None:
     the example's level (None: the level does not apply to the test)."""
     kind, value = level
     cells = {"tension": base["tension_cells"][0], "picture-frame": base["frame_cells"],
-             "compaction": None}[test]
+             "compaction": None, "periodic-shear": None}[test]
     n, sd = base["n_fibres"], base["spacing_ratio"]
     if kind == "fibres":
         n = int(value)
     elif kind == "sd":
         sd = float(value)
     elif kind == "cells":
-        if test == "compaction":
+        if cells is None:  # a test on the periodic cell: no coupon
             return None
         cells = int(value)
     else:
@@ -218,7 +223,7 @@ def values_of(test: str, summary: dict, curve: dict) -> dict:
         return {"k_before": fit["initial_stiffness_n_m_per_width"] / 1e3,
                 "k_after": fit["final_stiffness_n_m_per_width"] / 1e3,
                 **{k: None if v is None else v / 1e3 for k, v in forces.items()}}
-    if test == "picture-frame":
+    if test in SHEAR_TESTS:
         x, y = curve["shear_angle_deg"], curve["normalised_force_n_m"]
         forces = {f"F{a:g}°": _at(x, y, a) for a in FRAME_ANGLES_DEG}
         return {**{k: None if v is None else v / 1e3 for k, v in forces.items()},
@@ -311,7 +316,7 @@ def _verdict_text(r: dict, test: str) -> str:
         return "–"
     if qs:
         return "yes"
-    unit = {"tension": " %", "picture-frame": "°"}.get(test, "")
+    unit = {"tension": " %", "picture-frame": "°", "periodic-shear": "°"}.get(test, "")
     trusted = r.get("trusted")
     if trusted:
         ranges = ", ".join(f"{a:g}–{b:g}" for a, b in trusted)
@@ -570,6 +575,10 @@ TEST_NOTES = {
     "picture-frame": "square coupon tiled from the crimped cell, clamped as cut, "
                      "{frame_cells} × {frame_cells} cells for the fibres and s/d levels; "
                      "the example's speed and angle range",
+    "periodic-shear": "the crimped periodic cell sheared by its box (trellis shear, both "
+                      "families keep their length; no clamps: the picture frame's limit "
+                      "for a large coupon); F_norm = the box's work per initial area per "
+                      "Δ sin γ, locking by the frame's method; the scene's [periodic_shear]",
 }
 
 
@@ -596,8 +605,8 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
         f"{'1 cell = 5 mm; ' if EXAMPLE == 'plain_weave.toml' else ''}"
         f"\"(base)\" marks these in the tables), "
         f"{contact}. One process, in-process LAMMPS on one core, one run after the other "
-        f"under `nice`, on the 2-core machine shared with three other developers' jobs: "
-        f"wall times are noisy. Runs in the table: {len(done)}, "
+        f"under `nice`, on the 2-core machine with other jobs beside it: wall times are "
+        f"noisy. Runs in the table: {len(done)}, "
         f"{total / 60:.0f} min of runs and crimps.",
         "",
         f"Criterion (issue #16): between the two finest levels of each refinement "
@@ -850,7 +859,9 @@ def main(argv: list[str] | None = None) -> int:
                 if r["test"] == "compaction":  # its values come from the summary alone
                     r["values"] = values_of("compaction", {"test_summary": ts}, {})
                     r["thickness_monotone"] = ts.get("thickness_monotone")
-    shown = TESTS if args.replot or args.write else tests
+    # a study's tables: the tests it asked for now and those it has runs of
+    ran = {r.get("test") for r in store.get("runs", {}).values()}
+    shown = tuple(t for t in TESTS if t in tests or t in ran)
     body = section(store, base, dict(LEVELS), shown, settings_text)
     print(body)
     if args.write or args.note is not None or args.not_run:
@@ -860,6 +871,7 @@ def main(argv: list[str] | None = None) -> int:
         command = COMMAND + "".join(f" --set {s}" for s in args.set)
         if EXAMPLE != "plain_weave.toml":
             command += f" --scene {EXAMPLE}"
+        command += "".join(f" --only {t}" for t in args.only or ())
         if base["frame_cells"] != base_levels(read_example())["frame_cells"]:
             command += f" --frame-cells {base['frame_cells']}"
         update_section(name, body, command)

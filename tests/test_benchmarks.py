@@ -218,8 +218,11 @@ def test_convergence_levels_build_the_refined_scenes():
     f6 = bench.build_scene(bench.variant("picture-frame", ("cells", 6), base), data, base)
     coupon, _ = coupon_stage(f6, "picture-frame")
     assert (coupon.length_m, coupon.width_m) == pytest.approx((6 * cell[0], 6 * cell[1]))
-    # compaction runs on the periodic cell: no coupon level
+    # compaction and periodic shear run on the periodic cell: no coupon level
     assert bench.variant("compaction", ("cells", 6), base) is None
+    assert bench.variant("periodic-shear", ("cells", 6), base) is None
+    shear = bench.build_scene(bench.variant("periodic-shear", ("sd", 0.25), base), data, base)
+    assert shear.discretisation.spacing_ratio == 0.25
     assert data == bench.read_example()  # the example's dict untouched
 
 
@@ -271,6 +274,29 @@ def test_convergence_table_judges_the_two_finest_levels():
                                                             bench.LEVELS)
     assert bench._verdict_text({"quasi_static": False, "trusted": [[1.0, 3.0]]},
                                "tension") == "no; trusted 1–3 %"
+
+
+def test_convergence_reads_the_periodic_shear_like_the_frame():
+    """The periodic cell's curve gives the frame's quantities (F_norm at 10-40 deg from
+    the curve, the summary's locking angle), and its refinements are fibres and s/d."""
+    bench = load_convergence()
+    base = {"n_fibres": 7, "spacing_ratio": 0.25, "tension_cells": [4, 2], "frame_cells": 3}
+    g = np.linspace(0.0, 50.0, 101)
+    curve = {"shear_angle_deg": g, "normalised_force_n_m": 10.0 * g}
+    values = bench.values_of("periodic-shear", {"test_summary": {"locking_angle_deg": 32.1}},
+                             curve)
+    assert values == pytest.approx({"F10°": 0.1, "F20°": 0.2, "F30°": 0.3, "F40°": 0.4,
+                                    "locking": 32.1})
+    runs = {}
+    for level, f40 in ((("fibres", 7), 0.4), (("fibres", 19), 0.5), (("sd", 0.5), 0.41)):
+        v = bench.variant("periodic-shear", level, base)
+        runs[v.key] = {"key": v.key, "values": {**values, "F40°": f40}, "beads": 1,
+                       "steps": 1, "wall_s": 1.0, "quasi_static": True}
+    rows = {r[0]: r for r in bench.convergence_rows("periodic-shear", runs, base)}
+    # no cells row (no coupon); the coarser pair 1 -> 7, not run, is left out
+    assert set(rows) == {"fibres 7 → 19", "sd 0.5 → 0.25"}
+    assert rows["fibres 7 → 19"][4].startswith("+20.0 % **fail**")  # (0.5 - 0.4) / 0.5
+    assert rows["sd 0.5 → 0.25"][4].startswith("-2.5 % pass")
 
 
 def test_convergence_compaction_options_booleans_datasheet_and_monotone():
