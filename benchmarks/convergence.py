@@ -592,7 +592,7 @@ def section(store: dict, base: dict, levels: dict, tests, settings_text: str) ->
     if EXAMPLE != "plain_weave.toml":
         contact = f"{own}, changed with `{changed}`" if changed else own
     else:
-        contact = (f"contact changed with `{changed}`" if changed else
+        contact = (f"the example's settings changed with `{changed}`" if changed else
                    "the example's contact (default stiffness, μ = 0.3)")
     example_frame = base_levels(read_example())["frame_cells"]
     frame_note = "" if base["frame_cells"] == example_frame else \
