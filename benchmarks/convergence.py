@@ -316,7 +316,7 @@ def _verdict_text(r: dict, test: str) -> str:
         return "–"
     if qs:
         return "yes"
-    unit = {"tension": " %", "picture-frame": "°", "periodic-shear": "°"}.get(test, "")
+    unit = " %" if test == "tension" else "°" if test in SHEAR_TESTS else ""
     trusted = r.get("trusted")
     if trusted:
         ranges = ", ".join(f"{a:g}–{b:g}" for a, b in trusted)

@@ -167,15 +167,17 @@ def _overview(out: Path, tension: dict, frame: dict, cell: dict | None = None) -
                   if x is not None and 0 < x < float(tc["elongation_pct"].max()) else None)
     _shade_untrusted(b, *(t["test_summary"] for t in (frame, cell) if t is not None))
     marks = []
-    for test, label in ((frame, "picture frame"), (cell, "periodic cell (no clamps)")):
+    for test, name, note in ((frame, "picture frame", ""),
+                             (cell, "periodic cell", " (no clamps)")):
         if test is None:
             continue
         fc = read_csv(Path(test["results"]) / "curve.csv")
-        line, = b.plot(fc["shear_angle_deg"], fc["normalised_force_n_m"], lw=1.8, label=label)
+        line, = b.plot(fc["shear_angle_deg"], fc["normalised_force_n_m"], lw=1.8,
+                       label=name + note)
         lock = test["test_summary"].get("locking_angle_deg")
         if lock:
             marks.append({"kind": "vline", "x": lock, "colour": line.get_color(),
-                          "label": f"locking {lock:.3g}° ({label.split(' (')[0]})"})
+                          "label": f"locking {lock:.3g}° ({name})"})
     b.set_xlabel("shear angle γ [deg]")
     b.set_ylabel("normalised shear force F_norm [N/m]")
     b.set_title("Shear: picture frame and periodic cell", fontsize=10)
