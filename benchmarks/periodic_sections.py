@@ -6,7 +6,12 @@ mean width and height (spread of their virtual fibres' centres across the yarn i
 fabric's plane and through the thickness, at stations 0.25 mm apart along each yarn, each
 fibre first brought to the periodic image nearest its yarn's first fibre) and the width
 over the width of a yarn that narrows with the cell's affine deformation (w0·cos γ, w0 the
-width after the start-up, frame 1) and the fabric's span (bead centres).
+width after the start-up, frame 1), the fabric's span (bead centres), and what the fibres'
+length does: their crimp (path length over its length along the fibre's chord, minus 1,
+all fibres), their mean strain since the start-up and their mean tension (bond forces). In
+the cell's trellis kinematics the affine field keeps every fibre's length; a yarn that
+keeps its width leaves its crossing yarn a shorter run (p − w/cos γ, p the yarn spacing)
+to pass from over to under, so its crimp, at a fixed period, can only rise by stretching.
 
     python benchmarks/periodic_sections.py RUN [RUN ...]
     python benchmarks/periodic_sections.py --fibres RUN [RUN ...]   # fibre by fibre
@@ -66,6 +71,23 @@ def aligned_yarns(pos: np.ndarray, lx: float, ly: float, xy: float, fibre: np.nd
         yield q, fib
 
 
+def fibre_paths(pos: np.ndarray, lx: float, ly: float, xy: float, bonds: np.ndarray,
+                fibre: np.ndarray) -> tuple[float, float]:
+    """The fibres' crimp (summed path length over the summed length of each fibre's chord,
+    minus 1) and their summed path length [m], bond vectors taken at their nearest periodic
+    image (box vectors as :func:`cell_sections`; ``bonds`` 0-based bead pairs)."""
+    d = pos[bonds[:, 1]] - pos[bonds[:, 0]]
+    j = np.round(d[:, 1] / ly)
+    d[:, 0] -= j * xy
+    d[:, 1] -= j * ly
+    d[:, 0] -= np.round(d[:, 0] / lx) * lx
+    length = np.linalg.norm(d, axis=1)
+    chords = 0.0
+    for f in np.unique(fibre[bonds[:, 0]]):
+        chords += np.linalg.norm(d[fibre[bonds[:, 0]] == f, :2].sum(axis=0))
+    return float(length.sum() / chords - 1.0), float(length.sum())
+
+
 def fibre_offsets(pos: np.ndarray, lx: float, ly: float, xy: float, fibre: np.ndarray,
                   fibre_yarn: np.ndarray) -> list[np.ndarray]:
     """Per yarn: each fibre's offset across it [m] (its mean in-plane position less the
@@ -89,18 +111,26 @@ def table(run: Path) -> str:
         tilt = read_lengths(f["observables/box_tilt/value"])
         fibre = f["particles/all/fibre_id"][:]
         fibre_yarn = f["parameters/fabmd/fibre_yarn"][:]
+        bonds = f["connectivity/bonds"][:]
+        bond_force = f["observables/bond_force/value"][:]
     lines = [f"{folder}: {len(np.unique(fibre_yarn))} yarns",
              "| angle [°] | yarn width [mm] | width / (w0 cos γ) | yarn height [mm] | "
-             "fabric span [mm] |", "|---|---|---|---|---|"]
+             "fabric span [mm] | fibre crimp [%] | fibre strain [%] | fibre tension [N] |",
+             "|---|---|---|---|---|---|---|---|"]
     sections = [cell_sections(pos[k], edges[k][0], edges[k][1], tilt[k][0], fibre,
                               fibre_yarn) for k in range(len(pos))]
     ref = min(1, len(pos) - 1)  # frame 0 is before the start-up
     w0, ly0 = sections[ref][0], edges[ref][1]
+    paths = [fibre_paths(pos[k], edges[k][0], edges[k][1], tilt[k][0], bonds, fibre)
+             for k in range(len(pos))]
     for k, (width, height) in enumerate(sections):
         cos_g = min(1.0, edges[k][1] / ly0)
+        crimp, length = paths[k]
+        strain = length / paths[ref][1] - 1.0
         lines.append(f"| {np.degrees(np.arccos(cos_g)):.1f} | {1e3 * width:.4f} | "
                      f"{width / (w0 * cos_g):.3f} | {1e3 * height:.4f} | "
-                     f"{1e3 * np.ptp(pos[k][:, 2]):.4f} |")
+                     f"{1e3 * np.ptp(pos[k][:, 2]):.4f} | {100 * crimp:.3f} | "
+                     f"{100 * strain:.3f} | {np.mean(bond_force[k]):.3f} |")
     return "\n".join(lines)
 
 

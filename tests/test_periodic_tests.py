@@ -69,6 +69,10 @@ def test_only_periodic_cells_are_accepted():
         PeriodicShear(locking_initial_deg=(20.0, 10.0))
     with pytest.raises(InputError, match="periodic_shear.locking_factor"):
         PeriodicShear(locking_factor=1.0)
+    with pytest.raises(InputError, match="periodic_shear.release_tension must be true or"):
+        PeriodicShear(release_tension="yes")
+    with pytest.raises(InputError, match="periodic_shear.release_fraction"):
+        PeriodicShear(release_tension=True, release_fraction=0.5)
 
 
 @pytest.fixture(scope="module")
@@ -145,3 +149,32 @@ def test_trellis_shear_drag_leaves_the_force_alone(woven_cell, tmp_path):
     reference = work("affine", 0.1)
     assert np.abs(work("affine", 0.002) / reference - 1).max() < 0.003
     assert (work("absolute", 0.002) / reference - 1)[0] > 0.02
+
+
+@pytest.mark.lammps
+def test_a_released_cell_loses_its_crimp_tension_and_shears_from_its_own_size(woven_cell,
+                                                                              tmp_path):
+    """``release_tension``: before the shear the box follows zero membrane force, so the
+    crimped cell (its yarns shrunk 2 %, taut) shortens in x and y; the shear then turns the
+    released edge (xy = b' sin γ with b' the released ly) and the summary says by how much
+    the cell shrank. Without it the cell keeps its size."""
+    kept = PeriodicShear(max_shear_angle_deg=10).run(woven_cell, tmp_path / "kept",
+                                                     engine=Engine(progress=False))
+    assert kept.summary["released"] is None
+    result = PeriodicShear(max_shear_angle_deg=10, release_tension=True).run(
+        woven_cell, tmp_path / "released", engine=Engine(progress=False))
+    released = result.summary["released"]
+    assert released["cell_before_m"] == pytest.approx(list(
+        (woven_cell.box_hi - woven_cell.box_lo)[:2]))
+    assert all(-5 < e < -0.01 for e in released["strain_pct"]), released
+    text = (result.run_dir / "in.periodic_shear").read_text()
+    assert "press/berendsen x 0.0 0.0" in text and "$(ly:%.15g)" in text
+    b = released["cell_after_m"][1]
+    xy = read_tilt(result.run_dir / "trajectory.h5")[0]
+    g = np.radians(result.curve["shear_angle_deg"][-1])
+    assert xy == pytest.approx(b * np.sin(g), rel=1e-4)
+    # its membrane forces at the start are far below the taut cell's, and it says so
+    n_kept = np.loadtxt(kept.run_dir / "means.dat")[0, 1]
+    n_released = np.loadtxt(result.run_dir / "means.dat")[0, 1]
+    assert abs(n_released) < 0.2 * abs(n_kept), (n_released, n_kept)
+    assert all(abs(n) < 0.2 * abs(n_kept) for n in released["membrane_force_at_start_n_m"])

@@ -109,11 +109,12 @@ from ..errors import InputError
 from ..units import quantity
 from .beads import BeadParameters
 from .bundle_contact import BundleContact, LawSection, check_family_laws, law_sections
+from .crossing_law import CROSSING_KEYWORD, CrossingLaw
 
 NORMAL_MODELS = ("hooke", "hertz")
 #: ``ContactModel.crossing``: k_n of pairs of different families ∝ l0 (per unit length of
 #: fibre) or ∝ l0² (a force law per crossing; module docstring "Crossing per crossing")
-CROSSING_FORMS = ("per_length", "per_crossing")
+CROSSING_FORMS = ("per_length", "per_crossing", "law")
 #: s/d at which the per-crossing k_n = k'·l0²/(ratio·d) equals the per-length k'·l0
 CROSSING_REFERENCE_RATIO = 0.5
 #: the within-family law's table file in the run folder, and its section keyword
@@ -235,6 +236,9 @@ class ContactModel:
             2π·k'·δ²·(1 − δ/d)/sin θ whatever the bead spacing, averaged over register;
             module docstring "Crossing per crossing"). ``"per_crossing"`` needs a split
             contact (``within_family_stiffness_pa`` or ``within_family_law``).
+            ``"law"``: crossings compact by the within-family law's compaction law through
+            their patch (:mod:`fabmd.model.crossing_law`), ``normal_stiffness_pa`` only
+            in their hard core; needs ``within_family_law`` and one fibre kind.
         crossing_friction: Coulomb μ of pairs of different families (the warp–weft
             crossings), default ``friction``; ``friction`` then acts within a family
             (fibres of a yarn and neighbouring yarns). Needs a split contact.
@@ -273,6 +277,14 @@ class ContactModel:
         object.__setattr__(self, "within_family_laws", check_family_laws(
             self.within_family_law, self.within_family_laws, self.within_family_stiffness_pa,
             self.normal, self.per_length))
+        if self.crossing == "law" and (
+                self.within_family_law is None
+                or any(b != self.within_family_law for _, b in self.within_family_laws)):
+            raise InputError(
+                "contact.crossing = 'law' needs [contact] within_family (the compaction law "
+                "the crossings follow) and one fibre kind (every family the same virtual "
+                "fibre), got " + ("no within-family law" if self.within_family_law is None
+                                  else "families with their own fibres"))
         if self.within_family_stiffness_pa is not None:
             object.__setattr__(self, "within_family_stiffness_pa", inputs.positive(
                 "contact.within_family_stiffness_pa",
@@ -304,6 +316,9 @@ class ContactModel:
     def normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """Linear(ised) normal stiffness k_n [N/m] (Hertz: secant at the reference overlap);
         of a split contact, that of pairs of different families (``crossing``)."""
+        if self.crossing == "law":  # the crossing law's linear part (its table adds the rest)
+            return self.crossing_law(beads).linear_pair_stiffness_n_per_m(
+                max(b.bond_length_m for b in beads))
         if self.crossing == "per_crossing":  # split, Hooke, per length (checked when built)
             return crossing_pair_stiffness_n_per_m(
                 self.crossing_stiffness_pa(beads), max(b.bond_length_m for b in beads),
@@ -327,6 +342,9 @@ class ContactModel:
             kn = max(kn, self.within_family_stiffness_n_per_m(beads))
         for sec in self.law_sections(beads):  # its tables' steepest part
             kn = max(kn, sec.max_pair_stiffness_n_per_m(self.crossing_stiffness_pa(beads)))
+        if self.crossing == "law":
+            kn = max(kn, self.crossing_law(beads).max_pair_stiffness_n_per_m(
+                max(b.bond_length_m for b in beads)))
         if self.normal == "hertz":
             kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
                                   / self.reference_overlap)
@@ -370,6 +388,12 @@ class ContactModel:
         """The within-family law's bundle of ``family`` (its own fibre where given)."""
         return dict(self.within_family_laws).get(family, self.within_family_law)
 
+    def crossing_law(self, beads: list[BeadParameters]) -> CrossingLaw:
+        """The crossings' law (``crossing = "law"``; the within-family law's bundle)."""
+        if self.crossing != "law":
+            raise InputError(f"contact.crossing is {self.crossing!r}: no crossing law")
+        return CrossingLaw(self.within_family_law, self.crossing_stiffness_pa(beads))
+
     def crossing_stiffness_pa(self, beads: list[BeadParameters]) -> float:
         """k' of a crossing [Pa] (per unit length; needs the per-length form)."""
         return (self.normal_stiffness_pa if self.normal_stiffness_pa is not None
@@ -380,8 +404,13 @@ class ContactModel:
         (:data:`WITHIN_FAMILY_TABLE`, one section per :meth:`law_sections`), else none.
         Each section's excess uses the same bead spacing l0 as its linear part."""
         k_cross = self.crossing_stiffness_pa(beads) if self.within_family_law else None
-        return {WITHIN_FAMILY_TABLE: "\n".join(sec.table_text(k_cross) for sec in
-                                                self.law_sections(beads))} if k_cross else {}
+        if not k_cross:
+            return {}
+        sections = [sec.table_text(k_cross) for sec in self.law_sections(beads)]
+        if self.crossing == "law":
+            sections.append(self.crossing_law(beads).table_text(
+                max(b.bond_length_m for b in beads), CROSSING_KEYWORD))
+        return {WITHIN_FAMILY_TABLE: "\n".join(sections)}
 
     def softest_normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:
         """The smallest k_n of any type pair [N/m] (largest overlap per unit force)."""

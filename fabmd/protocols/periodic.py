@@ -39,7 +39,7 @@ from ..scene.drag import AffineField, affine_force_names
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
-from ..scene.templates import render, render_inline
+from ..scene.templates import fmt, render, render_inline
 from .driven import DrivenResult, RelaxedDrivenTest
 from .driven_outputs import energy_columns, read_outputs
 from .picture_frame import interval_force
@@ -245,6 +245,14 @@ class PeriodicShear(_PeriodicCellTest):
         locking_initial_deg: shear-angle range [deg] of the initial branch of the
             locking-angle method.
         locking_factor: the force over the initial line that marks the departure.
+        release_tension: before the shear, let the cell's in-plane size follow zero
+            membrane force (Berendsen on x and y, both fibre families free to shorten),
+            as a coupon cut from the roll loses its weaving tension; False (default): the
+            cell keeps the crimp stage's size and its yarns their weaving tension. The
+            shear then turns the released cell's edge, and the summary's ``released``
+            gives the cell's size before and after and its strain.
+        release_fraction: the release's Berendsen time constant over the test duration
+            (it settles for ten of them before the shear starts), (0, 0.2].
     """
 
     protocol = "periodic_shear"
@@ -259,9 +267,14 @@ class PeriodicShear(_PeriodicCellTest):
     speed_fraction: float = 1e-3
     locking_initial_deg: tuple[float, float] = (10.0, 20.0)
     locking_factor: float = 2.0
+    release_tension: bool = False
+    release_fraction: float = 0.02
 
     def check_fields(self) -> None:
         inputs.in_range("periodic_shear.max_shear_angle_deg", self.max_shear_angle_deg, 0, 70,
+                        low_open=True)
+        inputs.boolean("periodic_shear.release_tension", self.release_tension)
+        inputs.in_range("periodic_shear.release_fraction", self.release_fraction, 0, 0.2,
                         low_open=True)
         inputs.locking_method("periodic_shear", self.locking_initial_deg, self.locking_factor, 70)
 
@@ -270,14 +283,33 @@ class PeriodicShear(_PeriodicCellTest):
         return self.cell(model)[1] * math.radians(self.max_shear_angle_deg)
 
     def box_motion(self, model: BeadModel) -> str:
-        return render_inline("periodic_shear_box", b=self.cell(model)[1],
+        # released: the size the release left, read when LAMMPS reaches this line
+        b = "$(ly:%.15g)" if self.release_tension else fmt(self.cell(model)[1])
+        source = ("after the release of the yarns' tension" if self.release_tension
+                  else "the crimped cell's")
+        return render_inline("periodic_shear_box", b=b, b_source=source,
                              **self._schedule(model))
+
+    def transverse_block(self, model: BeadModel) -> str:
+        if not self.release_tension:
+            return "# the cell keeps its size: the yarns keep the crimp stage's tension"
+        lx, ly, lz = self.cell(model)
+        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
+        # Berendsen's modulus: a hundredth of all fibres' E·A over the section. A crimped
+        # fabric is far softer in-plane than its fibres, and a guess above its modulus
+        # relaxes slowly (a tenth left a fifth of the Twintex cell's tension after ten
+        # time constants); one far below it would overshoot
+        modulus = 0.01 * max(model.n_fibres, 1) * ea / (min(lx, ly) * lz)
+        pdamp = self.release_fraction * self.duration_s(model)
+        return render_inline("periodic_release", pdamp=pdamp, modulus=modulus,
+                             settle_steps=math.ceil(10 * pdamp / self.time_step_s(model)))
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
         plan = self.read_plan(run_dir, model)  # what the run was written with
         out = read_outputs(run_dir, plan.every, plan.time_step_s, monitor)
-        lx0, ly0, _ = self.cell(model)
+        # the cell as the shear starts (after a release of the yarns' tension, if any)
+        lx0, ly0 = float(out["box_lx_m"][0]), float(out["box_ly_m"][0])
         gamma = np.arctan2(out["box_xy_m"], out["box_ly_m"])
         # F_norm = power per initial area / (cos γ γ̇): work over A0·Δ(sin γ) per interval
         fnorm = interval_force(np.sin(gamma), out.external_work_j) / (lx0 * ly0)
@@ -292,7 +324,16 @@ class PeriodicShear(_PeriodicCellTest):
         initial = (None if lock["initial_slope"] is None
                    else float(np.degrees(lock["initial_slope"])))  # per radian
         summary = self._common_summary(model, out, deg / self.max_shear_angle_deg, plan)
+        cell = self.cell(model)
         summary.update({
+            "released": None if not self.release_tension else {
+                "cell_before_m": [cell[0], cell[1]], "cell_after_m": [lx0, ly0],
+                "strain_pct": [100 * (lx0 / cell[0] - 1), 100 * (ly0 / cell[1] - 1)],
+                # what is left of the membrane forces as the shear starts (ten Berendsen
+                # time constants, each release_fraction of this test's duration: a slower
+                # test releases more completely)
+                "membrane_force_at_start_n_m": [float(out["n_xx_n_m"][0]),
+                                                float(out["n_yy_n_m"][0])]},
             "initial_shear_stiffness_n_m_per_rad": initial,
             "locking_angle_deg": lock["x"] if lock["found"] else None,
             "locking": lock,

@@ -15,6 +15,7 @@ from ..model.contact import (
     ContactModel,
     ToolContact,
 )
+from ..model.crossing_law import CROSSING_KEYWORD
 from .templates import fmt, render, render_inline
 
 #: neighbour skin as a fraction of the smallest bead diameter (LAMMPS-NOTES: ~0.2 d)
@@ -217,9 +218,20 @@ def _contact_law(model: BeadModel, contact_model: ContactModel, beads: list[Bead
             raise InputError(f"contact.within_family_law: the {family} fibres need the "
                              f"law's bead diameter {own.diameter_m:.6g} m (their fibre's), "
                              f"got {d.min():.6g}–{d.max():.6g} m")
-        tables.append(render_inline("pair_coeff_table_law", i=i, table_file=WITHIN_FAMILY_TABLE,
+        tables.append(render_inline("pair_coeff_table_law", i=i, j=i,
+                                    table_file=WITHIN_FAMILY_TABLE,
                                     keyword=sections[own].keyword, cutoff=own.cutoff_text))
+    if contact_model.crossing == "law":  # every pair of different families: the crossing
+        n = len(model.family_names)
+        tables += [render_inline("pair_coeff_table_law", i=i, j=j, table_file=WITHIN_FAMILY_TABLE,
+                                 keyword=CROSSING_KEYWORD, cutoff=law.cutoff_text)
+                   for i in range(1, n + 1) for j in range(i + 1, n + 1)]
+    note = ("fibres of different families cross\n# through a patch that compacts by the same "
+            "law (section CROSSING; contact.crossing = 'law')"
+            if contact_model.crossing == "law" else
+            "fibres of different families\n# touch with the crossing stiffness")
     return render("contact_granular_law", law=law.law.name, friction=contact_model.friction,
+                  crossing_note=note,
                   table_file=WITHIN_FAMILY_TABLE, points=TABLE_POINTS,
                   pair_coeffs="\n".join(pair_coeffs), table_coeffs="\n".join(tables))
 
@@ -306,6 +318,9 @@ def _overlap_families(model: BeadModel, contact_model: ContactModel,
         core = contact_model.family_law(family).core_spacing_m(k_cross)
         lines.append(render("overlap_pair_family", i=i, core=core))
         overlap = f"ternary(v_fabmd_overlap_{i}>{overlap},v_fabmd_overlap_{i},{overlap})"
+    if contact_model.crossing == "law":  # crossings too close to the law's core by design
+        return render("overlap_pair_law_all", core=contact_model.crossing_law(beads)
+                      .core_spacing_m)
     return render("overlap_pair_families", family_lines="\n".join(lines), overlap=overlap,
                   kn=fmt(contact_model.normal_stiffness_n_per_m(beads)), diameter=d_min)
 
