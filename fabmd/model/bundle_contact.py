@@ -287,17 +287,26 @@ class BundleContact:
         r = np.linspace(TABLE_INNER * d, d, points)
         k_lin = self.linear_pair_stiffness_n_per_m(l0, crossing_stiffness_pa)
         excess = self.pair_force_n(r, l0, crossing_stiffness_pa) - k_lin * (d - r)
-        excess[-1] = 0.0
-        # energy: the integral of the force from r to the cutoff d (trapezoid, fine grid)
-        seg = 0.5 * (excess[1:] + excess[:-1]) * np.diff(r)
-        energy = np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
-        lines = [f"# fabmd: within-family contact, {self.law.name} law, register-averaged "
-                 f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead pair "
-                 f"l0 = {l0:.6g} m)", "", keyword,
-                 f"N {points} R {r[0]:.12g} {self.table_end_text}", ""]
-        lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
-                  for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
-        return "\n".join(lines) + "\n"
+        return table_section(r, excess, keyword, self.table_end_text,
+                             f"within-family contact, {self.law.name} law, register-averaged "
+                             f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead "
+                             f"pair l0 = {l0:.6g} m)")
+
+
+def table_section(r: np.ndarray, excess: np.ndarray, keyword: str, end_text: str,
+                  title: str) -> str:
+    """A LAMMPS ``pair_style table`` section: forces ``excess`` [N] at distances ``r`` [m]
+    (the last row set to 0, the cutoff) and their energy [J], the integral of the force from
+    r to the cutoff (trapezoid); ``end_text`` the outer end as written, ``title`` its
+    comment."""
+    excess = np.array(excess, float)
+    excess[-1] = 0.0
+    seg = 0.5 * (excess[1:] + excess[:-1]) * np.diff(r)
+    energy = np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
+    lines = [f"# fabmd: {title}", "", keyword, f"N {len(r)} R {r[0]:.12g} {end_text}", ""]
+    lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
+              for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
+    return "\n".join(lines) + "\n"
 
 
 #: rows of the grid the pair force is inverted on (r from TABLE_INNER·d to d)

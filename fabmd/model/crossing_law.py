@@ -58,7 +58,7 @@ import numpy as np
 
 from .. import inputs
 from ..errors import InputError
-from .bundle_contact import TABLE_INNER, TABLE_POINTS, BundleContact
+from .bundle_contact import TABLE_INNER, TABLE_POINTS, BundleContact, table_section
 
 #: the crossing's table section keyword (in the within-family law's table file)
 CROSSING_KEYWORD = "CROSSING"
@@ -203,13 +203,7 @@ class CrossingLaw:
         r = np.linspace(TABLE_INNER * d, d, points)
         k_lin = self.linear_pair_stiffness_n_per_m(l0)
         excess = self.pair_force_n(r, l0) - k_lin * (d - r)
-        excess[-1] = 0.0
-        seg = 0.5 * (excess[1:] + excess[:-1]) * np.diff(r)
-        energy = np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
-        lines = [f"# fabmd: crossing contact, {self.bundle.law.name} law through the patch "
-                 f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead pair "
-                 f"l0 = {l0:.6g} m)", "", keyword,
-                 f"N {points} R {r[0]:.12g} {self.bundle.table_end_text}", ""]
-        lines += [f"{i} {ri:.12g} {ei:.12g} {fi:.12g}"
-                  for i, (ri, ei, fi) in enumerate(zip(r, energy, excess, strict=True), start=1)]
-        return "\n".join(lines) + "\n"
+        return table_section(r, excess, keyword, self.bundle.table_end_text,
+                             f"crossing contact, {self.bundle.law.name} law through the patch "
+                             f"(excess over the linear part k_n = {k_lin:.6g} N/m, per bead "
+                             f"pair l0 = {l0:.6g} m)")
