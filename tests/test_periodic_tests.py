@@ -177,4 +177,6 @@ def test_a_released_cell_loses_its_crimp_tension_and_shears_from_its_own_size(wo
     n_kept = np.loadtxt(kept.run_dir / "means.dat")[0, 1]
     n_released = np.loadtxt(result.run_dir / "means.dat")[0, 1]
     assert abs(n_released) < 0.2 * abs(n_kept), (n_released, n_kept)
-    assert all(abs(n) < 0.2 * abs(n_kept) for n in released["membrane_force_at_start_n_m"])
+    left = released["membrane_force_at_start_n_m"]
+    assert left[0] == pytest.approx(n_released, rel=1e-6)
+    assert all(0 < abs(n) < 0.2 * abs(n_kept) for n in left), (left, n_kept)

@@ -325,15 +325,16 @@ class PeriodicShear(_PeriodicCellTest):
                    else float(np.degrees(lock["initial_slope"])))  # per radian
         summary = self._common_summary(model, out, deg / self.max_shear_angle_deg, plan)
         cell = self.cell(model)
+        first = min(1, len(out["n_xx_n_m"]) - 1)
         summary.update({
             "released": None if not self.release_tension else {
                 "cell_before_m": [cell[0], cell[1]], "cell_after_m": [lx0, ly0],
                 "strain_pct": [100 * (lx0 / cell[0] - 1), 100 * (ly0 / cell[1] - 1)],
                 # what is left of the membrane forces as the shear starts (ten Berendsen
                 # time constants, each release_fraction of this test's duration: a slower
-                # test releases more completely)
-                "membrane_force_at_start_n_m": [float(out["n_xx_n_m"][0]),
-                                                float(out["n_yy_n_m"][0])]},
+                # test releases more completely): the first average (row 0 has none yet)
+                "membrane_force_at_start_n_m": [float(out["n_xx_n_m"][first]),
+                                                float(out["n_yy_n_m"][first])]},
             "initial_shear_stiffness_n_m_per_rad": initial,
             "locking_angle_deg": lock["x"] if lock["found"] else None,
             "locking": lock,
