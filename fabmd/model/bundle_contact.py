@@ -159,10 +159,7 @@ class BundleContact:
 
     def _law_pressure(self, r: np.ndarray) -> np.ndarray:
         """p(Vf(r)) − p(Vf(d)), 0 where the law carries nothing [Pa]."""
-        k = self.law.coefficient * self.law.modulus_pa
-        n = self.law.exponent
-        p = k * (np.maximum(self.vf_at(r), self.law.vf0) ** n - self.law.vf0**n)
-        return np.maximum(0.0, p - self.touching_pressure_pa)
+        return np.maximum(0.0, self.law.pressure_pa(self.vf_at(r)) - self.touching_pressure_pa)
 
     def _law_slope(self, r: np.ndarray) -> np.ndarray:
         """dq/dδ of the law's line force at spacing r [Pa] (δ = d − r)."""

@@ -36,6 +36,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import inputs
 from ..errors import InputError
 from ..units import quantity
@@ -82,10 +84,13 @@ class CompactionLaw:
         k = pressure_pa / (modulus_pa * (vf**exponent - vf0**exponent))
         return cls(k, modulus_pa, vf0, exponent, name)
 
-    def pressure_pa(self, vf: float) -> float:
-        """Transverse pressure at fibre volume fraction ``vf`` [Pa]."""
+    def pressure_pa(self, vf):
+        """Transverse pressure at fibre volume fraction ``vf`` [Pa] (float, or array: array);
+        0 at and below Vf0."""
         n = self.exponent
-        return max(0.0, self.coefficient * self.modulus_pa * (vf**n - self.vf0**n))
+        p = np.maximum(0.0, self.coefficient * self.modulus_pa
+                       * (np.maximum(vf, self.vf0) ** n - self.vf0**n))
+        return float(p) if np.ndim(p) == 0 else p
 
     def max_pressure_pa(self) -> float:
         """The pressure at which the law reaches :data:`PACKING_LIMIT` [Pa]: the van Wyk

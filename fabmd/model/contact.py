@@ -125,6 +125,11 @@ WITHIN_FAMILY_KEYWORD = "WITHIN_FAMILY"
 DEFAULT_TRANSVERSE_FACTOR = 0.4
 
 
+def widest_spacing(beads: list[BeadParameters]) -> float:
+    """The widest bead spacing l0 of ``beads`` [m]: what per-pair laws are scaled to."""
+    return max(b.bond_length_m for b in beads)
+
+
 def default_stiffness_pa(beads: list[BeadParameters]) -> float:
     """Default k' [Pa]: 0.4·E·A/d² of the stiffest virtual fibre (module docstring)."""
     return DEFAULT_TRANSVERSE_FACTOR * max(b.axial_stiffness_n / b.diameter_m**2
@@ -142,7 +147,7 @@ def _normal_stiffness(owner: str, per_length_pa: float | None, factor: float | N
         return factor * max(b.spring_n_per_m for b in beads)
     k_line = per_length_pa if per_length_pa is not None else default_stiffness_pa(beads)
     # the widest spacing: the stiffest pair, which sets the time step and the overlaps
-    return k_line * max(b.bond_length_m for b in beads)
+    return k_line * widest_spacing(beads)
 
 
 def crossing_pair_stiffness_n_per_m(stiffness_pa: float, spacing_m: float,
@@ -318,10 +323,10 @@ class ContactModel:
         of a split contact, that of pairs of different families (``crossing``)."""
         if self.crossing == "law":  # the crossing law's linear part (its table adds the rest)
             return self.crossing_law(beads).linear_pair_stiffness_n_per_m(
-                max(b.bond_length_m for b in beads))
+                widest_spacing(beads))
         if self.crossing == "per_crossing":  # split, Hooke, per length (checked when built)
             return crossing_pair_stiffness_n_per_m(
-                self.crossing_stiffness_pa(beads), max(b.bond_length_m for b in beads),
+                self.crossing_stiffness_pa(beads), widest_spacing(beads),
                 min(b.diameter_m for b in beads), self.crossing)
         return _normal_stiffness("contact", self.normal_stiffness_pa, self.stiffness_factor,
                                  self.stiffness_n_per_m, beads)
@@ -344,7 +349,7 @@ class ContactModel:
             kn = max(kn, sec.max_pair_stiffness_n_per_m(self.crossing_stiffness_pa(beads)))
         if self.crossing == "law":
             kn = max(kn, self.crossing_law(beads).max_pair_stiffness_n_per_m(
-                max(b.bond_length_m for b in beads)))
+                widest_spacing(beads)))
         if self.normal == "hertz":
             kn *= 1.5 * math.sqrt(max(self.overlap_warning, self.reference_overlap)
                                   / self.reference_overlap)
@@ -409,7 +414,7 @@ class ContactModel:
         sections = [sec.table_text(k_cross) for sec in self.law_sections(beads)]
         if self.crossing == "law":
             sections.append(self.crossing_law(beads).table_text(
-                max(b.bond_length_m for b in beads), CROSSING_KEYWORD))
+                widest_spacing(beads), CROSSING_KEYWORD))
         return {WITHIN_FAMILY_TABLE: "\n".join(sections)}
 
     def softest_normal_stiffness_n_per_m(self, beads: list[BeadParameters]) -> float:

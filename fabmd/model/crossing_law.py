@@ -109,10 +109,8 @@ class CrossingLaw:
         return float(p) if p.ndim == 0 else p
 
     def _law(self, delta: np.ndarray) -> np.ndarray:
-        law = self.bundle.law
-        k = law.coefficient * law.modulus_pa
-        vf = np.maximum(self._vf(delta), law.vf0)
-        return np.maximum(0.0, k * (vf**law.exponent - law.vf0**law.exponent)
+        """p_s at overlap δ inside the core overlap [Pa] (the within-family law's shift)."""
+        return np.maximum(0.0, self.bundle.law.pressure_pa(self._vf(delta))
                           - self.bundle.touching_pressure_pa)
 
     def _slope(self, delta: np.ndarray) -> np.ndarray:
