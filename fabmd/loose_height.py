@@ -118,8 +118,9 @@ def pin_crimp(scene: Scene, out: Path, engine: Engine | None = None,
         def say(line: str) -> None:
             print(line, file=sys.stderr, flush=True)
     if say is not None:
+        state = (" once released off the loom, woven" if crimp.release_tension else "")
         say(f"loose height: searching the loose sections of {', '.join(targets.crimp_pct)} "
-            f"for crimp {_targets_text(crimp.target_crimp_pct)} at the weaving tension "
+            f"for crimp {_targets_text(crimp.target_crimp_pct)}{state} at the weaving tension "
             f"(a crimp run each, at most {targets.max_runs})")
     result = calibrate(cell, targets, base=base, out=out,
                        engine=dataclasses.replace(engine, progress=False), overwrite=True,

@@ -6,7 +6,11 @@ per stage::
     DIR/loose_height/  with ``[crimp] crimp_by = "loose_height"``: the search of the loose
                   sections that reach the stated crimp at the weaving tension
                   (:func:`fabmd.loose_height.pin_crimp`; ``pinned_crimp.json``)
-    DIR/crimp/    the as-woven state (crimped.data + crimped.json, sections.png, ...)
+    DIR/crimp/    the as-woven state (crimped.data + crimped.json, sections.png, ...); with
+                  ``[crimp] release_tension`` its ``release/`` holds the cell released off
+                  the loom (released.data), which the later stages start from
+    DIR/release/  only with ``--crimped`` of a folder crimped without the release that the
+                  scene asks for: that cell released here
     DIR/coupon/   the coupon cut (or tiled) from it and relaxed free (coupon.data)
     DIR/NAME/     the test: curve.csv, summary.json, curve.png, the LAMMPS run
     DIR/summary.json   the stages' key results
@@ -29,7 +33,8 @@ from .errors import InputError, NotQuasiStatic, RunInterrupted
 from .loose_height import PINNED, pin_crimp, pinned_scene
 from .preflight import check_scene, check_test, plan_test
 from .protocols.coupon import CouponResult, load_coupon
-from .protocols.crimp import CrimpResult, load_crimped
+from .protocols.crimp import CrimpResult, has_release, load_crimped
+from .protocols.release import load_released
 from .results.folder import (
     MARKER,
     PARTIAL,
@@ -279,10 +284,21 @@ def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None
             _stop_between_stages(out, "crimp")
         else:
             crimp_result = None
-            crimped_model = load_crimped(crimp_dir)
             if (Path(crimp_dir) / PINNED).exists() or crimp.pins_crimp:
                 scene = scene_of_crimp(scene, crimp_dir)
                 crimp, protocol, coupon = _stages(scene, test)
+            # the scene decides whether the tests start from the released cell
+            crimped_model = load_crimped(crimp_dir, released=crimp.release_tension)
+            if crimp.release_tension and not has_release(crimp_dir):
+                # a crimp folder from before the release (or crimped without it): release
+                # its cell here, in this run's own folder
+                release_dir = out / "release"
+                if stage_mode(release_dir, resume) == "done":
+                    crimped_model = load_released(release_dir)
+                else:
+                    crimped_model = crimp.release_stage().run(
+                        crimped_model, release_dir, engine=engine, overwrite=True).model
+                    _stop_between_stages(out, "release")
         # 2. coupon
         coupon_dir = out / "coupon"
         if coupon is None:

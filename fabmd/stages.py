@@ -93,6 +93,8 @@ def coupon_stage(scene: Scene, test: str) -> tuple[Coupon, str]:
                              f"[along x, along y], got {cells!r}")
         table.setdefault("length_m", cells[0] * cell[0])
         table.setdefault("width_m", cells[1] * cell[1])
+        table["cells"] = tuple(cells)  # of the crimped cell's own size (a released one is
+        # shorter than the drawn one)
     defaults = dict(kind.coupon or {})
     defaults.update(table)
     return build(Coupon, defaults, f"{section(test)}.coupon", contact=scene.contact), source

@@ -97,6 +97,41 @@ def test_resume_of_a_finished_pipeline_keeps_stages(tiny_scene, tmp_path):
     assert first["test_summary"]["steps"] > 0
 
 
+def test_a_scene_that_releases_starts_its_tests_from_the_released_cell(tiny_scene, tmp_path):
+    """``[crimp] release_tension``: ``fabmd crimp`` ends with the release (``release/``, the
+    summary's ``released``, its crimp measured there); a test given a folder crimped without
+    it releases that cell in its own folder; one whose scene does not ask for it takes the
+    woven cell of a released folder."""
+    import tomllib
+
+    from fabmd.engine import Engine
+    from fabmd.protocols.crimp import load_crimped
+
+    released = tmp_path / "released.toml"
+    released.write_text(TINY.replace("[crimp]\n", "[crimp]\nrelease_tension = true\n"
+                                     "handling_tension = \"0.5 N\"\n"))
+    out = run_cli("crimp", str(released), "--out", str(tmp_path / "c"), "--form", "cell",
+                  "--json")
+    assert out.returncode == 0, out.stderr
+    crimp = json.loads(out.stdout)
+    assert crimp["released"]["settled"] and crimp["released"]["strain_pct"][0] < 0
+    assert crimp["crimped"]["crimp_pct"]["warp"] > crimp["woven"]["crimp_pct"]["warp"]
+    assert (tmp_path / "c" / "release" / "released.data").exists()
+    woven = load_crimped(tmp_path / "c", released=False)
+    kept = load_crimped(tmp_path / "c")
+    assert kept.box_hi[0] - kept.box_lo[0] < woven.box_hi[0] - woven.box_lo[0]
+    # a folder crimped without the release, tested with the scene that asks for it
+    engine = Engine(progress=False)
+    plain = parse_scene(tomllib.loads(TINY), source=str(tiny_scene))
+    run_test(plain, "tension", tmp_path / "t0", engine=engine)
+    scene = parse_scene(tomllib.loads(released.read_text()), source=str(released))
+    summary = run_test(scene, "tension", tmp_path / "t1", engine=engine,
+                       crimped=tmp_path / "t0" / "crimp")
+    rel = json.loads((tmp_path / "t1" / "release" / "summary.json").read_text())
+    assert rel["strain_pct"][0] < 0 and summary["test_summary"]["steps"] > 0
+    assert not (tmp_path / "t0" / "crimp" / "release").exists()  # the input folder untouched
+
+
 def test_presets_change_discretisation_and_speed_only():
     import tomllib
 

@@ -34,9 +34,26 @@ def run(args) -> int:
             f"  fibre volume fraction {cr['fibre_volume_fraction']:.3f}\n"
             f"  {_datasheet_line(s)}\n"
             f"  {tension_line(s.get('yarn_tension') or {})}\n"
+            f"{_released_text(s)}"
             f"  results in {result.run_dir}")
     emit(s, args.json, text)
     return 0
+
+
+def _released_text(s: dict) -> str:
+    """What the release of the weaving tension did (``[crimp] release_tension``): '' without."""
+    r = s.get("released")
+    if not r:
+        return ""
+    woven, rel = s["woven"], s["crimped"]
+    tension = ", ".join(f"{f} {v['yarn_n']:.3g} N" for f, v in
+                        (r.get("yarn_tension_released") or {}).items())
+    return (f"  released (the measures above; [crimp] release_tension): cell "
+            f"{r['strain_pct'][0]:+.2f} / {r['strain_pct'][1]:+.2f} % (x / y), thickness "
+            f"{1e3 * woven['thickness_m']:.3f} -> {1e3 * rel['thickness_m']:.3f} mm, crimp "
+            + ", ".join(f"{f} {woven['crimp_pct'][f]:.2f} -> {rel['crimp_pct'][f]:.2f} %"
+                        for f in rel["crimp_pct"])
+            + f"; yarn tension left {tension}; {r['stop']}\n")
 
 
 def _datasheet_line(s: dict) -> str:

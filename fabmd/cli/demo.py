@@ -66,7 +66,7 @@ def run(args) -> int:
         f"thickness {1e3 * c['loose']['thickness_m']:.2f} -> "
         f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp (per fibre) "
         + ", ".join(f"{f} {v:.2f} %" for f, v in c["crimped"]["crimp_pct"].items())
-        + f"{heights}; {c.get('stop', '')} -> crimp/sections.png")
+        + f"{heights}; {c.get('stop', '')}{_released(c)} -> crimp/sections.png")
     tension = run_test(scene, "tension", out / "tension", engine=engine,
                        crimped=out / "crimp")
     t = tension["test_summary"]
@@ -105,6 +105,17 @@ def _shear_line(test_summary: dict) -> str:
     lock = test_summary["locking_angle_deg"]
     lock = f"{lock:.1f} deg" if lock is not None else "none found"  # the test may stop first
     return f"{forces}locking angle {lock}"
+
+
+def _released(c: dict) -> str:
+    """The release's part of the crimp line (``[crimp] release_tension``): '' without."""
+    r = c.get("released")
+    if not r:
+        return ""
+    left = ", ".join(f"{v['yarn_n']:.2g}" for v in (r.get("yarn_tension_released") or {}).values())
+    woven = ", ".join(f"{v['yarn_n']:.2g}" for v in (c.get("yarn_tension") or {}).values())
+    return (f"; released off the loom: cell {r['strain_pct'][0]:+.2f} %, yarn tension "
+            f"{woven} -> {left} N, thickness {1e3 * c['woven']['thickness_m']:.2f} mm woven")
 
 
 def _balance(test_summary: dict) -> str:

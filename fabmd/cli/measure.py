@@ -8,7 +8,8 @@ from pathlib import Path
 from .common import emit
 
 #: state files, most advanced first
-STATES = (("final.data", "model.json"), ("crimped.data", "crimped.json"),
+STATES = (("final.data", "model.json"), ("released.data", "released.json"),
+          ("crimped.data", "crimped.json"),
           ("coupon.data", "coupon.json"), ("model.data", "model.json"))
 
 

@@ -178,6 +178,9 @@ class _Run:
 
     def run_chunks(self, index: int, start: int, steps: int, sent: int) -> None:
         """``run steps`` (of which ``sent`` are done) in chunks from step ``start``."""
+        if steps == 0:  # 'run 0' sets the state up (computes, immediate variables)
+            self.send(f"run 0 start {start} stop {start}")
+            return
         size = self.monitor_every if self.monitor is not None and self.monitor_every \
             else chunk_size(steps)
         pre = "yes"

@@ -81,6 +81,9 @@ class Coupon:
             conditioned free of tension before cutting, instead of through the cut edges
             (which leaves a crimp that varies along the coupon and with its length).
             False (default): the fibres keep the crimp's rest lengths.
+        cells: (nx, ny) whole periodic cells of the source: the coupon's length and width
+            are then those of the cell it is cut from (a released cell is shorter than
+            the drawn one), ``length_m``/``width_m`` only where the source is no cell.
     """
 
     length_m: float
@@ -96,6 +99,7 @@ class Coupon:
     cohesion_factor: float = 0.0
     cohesion_reach: float = DEFAULT_REACH
     relieve_tension: bool = False
+    cells: tuple[int, int] | None = None
 
     def __post_init__(self):
         inputs.positive("coupon.length_m", self.length_m)
@@ -105,6 +109,9 @@ class Coupon:
         if self.tile is not None:
             inputs.positive_int("coupon.tile[0]", self.tile[0])
             inputs.positive_int("coupon.tile[1]", self.tile[1])
+        if self.cells is not None:
+            inputs.positive_int("coupon.cells[0]", self.cells[0])
+            inputs.positive_int("coupon.cells[1]", self.cells[1])
         check_trajectory("coupon.trajectory", self.trajectory)
         inputs.in_range("coupon.bending_factor", self.bending_factor, 0.0, 1.0)
         inputs.in_range("coupon.cohesion_factor", self.cohesion_factor, 0.0, 1.0)
@@ -113,12 +120,21 @@ class Coupon:
             raise InputError(f"coupon.relieve_tension must be true or false, got "
                              f"{self.relieve_tension!r}")
 
+    def size_m(self, fabric: BeadModel) -> tuple[float, float]:
+        """(length, width) [m] of the coupon cut from ``fabric``: ``cells`` whole cells of a
+        periodic source, else ``length_m`` × ``width_m``."""
+        if self.cells is None or not (fabric.periodic[0] and fabric.periodic[1]):
+            return self.length_m, self.width_m
+        cell = fabric.box_hi - fabric.box_lo
+        return self.cells[0] * float(cell[0]), self.cells[1] * float(cell[1])
+
     def cells_needed(self, fabric: BeadModel) -> tuple[int, int]:
         """Copies of a periodic cell that hold the coupon (any angle) plus the edge zone."""
         cell = fabric.box_hi - fabric.box_lo
         a = np.radians(self.angle_deg)
-        span_x = abs(self.length_m * np.cos(a)) + abs(self.width_m * np.sin(a))
-        span_y = abs(self.length_m * np.sin(a)) + abs(self.width_m * np.cos(a))
+        length, width = self.size_m(fabric)
+        span_x = abs(length * np.cos(a)) + abs(width * np.sin(a))
+        span_y = abs(length * np.sin(a)) + abs(width * np.cos(a))
         pad = 2 * self.edge_zone_m + 2 * float(fabric.diameters.max())
         return (int(np.ceil((span_x + pad) / cell[0])) + 1,
                 int(np.ceil((span_y + pad) / cell[1])) + 1)
@@ -126,6 +142,7 @@ class Coupon:
     def geometry(self, fabric: BeadModel) -> BeadModel:
         """The coupon beads (before relaxation), length along x."""
         source = fabric
+        length, width = self.size_m(fabric)
         if self.tile is not None:
             source = tile(fabric, *self.tile, periodic=False)
         elif fabric.periodic[0] and fabric.periodic[1]:
@@ -133,7 +150,7 @@ class Coupon:
         elif any(fabric.periodic):
             raise InputError("a fabric periodic in one direction only cannot be cut; "
                              "use a fully periodic cell or a finite piece")
-        coupon = cut(source, self.length_m, self.width_m, angle_deg=self.angle_deg,
+        coupon = cut(source, length, width, angle_deg=self.angle_deg,
                      edge_zone_m=self.edge_zone_m)
         if self.relieve_tension:
             coupon = relieve_fibre_tension(coupon)

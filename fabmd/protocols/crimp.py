@@ -22,6 +22,7 @@ crimped state is its last frame).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -111,6 +112,16 @@ class Crimp:
             40 % of its bonds' energy and the tension it reported fell to a third once the
             run went on (benchmarks/RESULTS.md "The crimp stopped before the fabric was at
             rest", "A crimp with a stated shrink judged at rest").
+        release_tension: after the crimp (and its searches), let the periodic cell shed
+            its weaving tension down to ``handling_tension``, as cloth taken off the loom
+            (:mod:`fabmd.protocols.release`, in the folder's ``release/``): the stage's
+            model and its ``crimped`` measures are then the released cell's (a crimp
+            target is judged on it, as ASTM D3883 measures crimp on relaxed fabric), the
+            summary's ``woven`` the cell under the weaving tension, ``yarn_tension`` the
+            weaving tension, ``released`` what the release did. Needs the periodic cell.
+        handling_tension: the yarn tension the released cell is held at (N per yarn or
+            cN/tex, one for all or per family; default 0.05 cN/tex, a twentieth of a
+            weaving tension: strings held at none shorten without end).
         trajectory: trajectory frames (``trajectory.h5``, ParaView files). The run
             stops once quasi-static, so frames are spread over :meth:`expected_steps`
             (the ramp and a quarter of the relaxation budget); the crimped state is
@@ -132,6 +143,8 @@ class Crimp:
     crimp_by: str = "expansion"
     crimp_tolerance_pct: float = 0.05
     settle_force_n: float | None = None
+    release_tension: bool = False
+    handling_tension: dict | str | float = "0.05 cN/tex"
 
     def __post_init__(self):
         if not isinstance(self.expansion, dict):
@@ -153,6 +166,9 @@ class Crimp:
         inputs.positive("crimp.crimp_tolerance_pct", self.crimp_tolerance_pct)
         if self.settle_force_n is not None:
             inputs.positive("crimp.settle_force_n", self.settle_force_n)
+        inputs.boolean("crimp.release_tension", self.release_tension)
+        if self.release_tension:
+            self.release_stage()  # checks the handling tension
         if self.crimp_by == "loose_height":
             self._check_loose_height()
         elif self.target_crimp_pct:
@@ -210,8 +226,19 @@ class Crimp:
                              f"shrink); crimp_by = \"loose_height\" reaches both, the "
                              f"crimp by the loose section's height")
 
+    def release_stage(self):
+        """The :class:`~fabmd.protocols.release.Release` run after the crimp
+        (``release_tension``), with the crimp's contact, time step and settle force."""
+        from .release import Release
+
+        return Release(contact=self.contact, time_step=self.time_step,
+                       handling_tension=self.handling_tension,
+                       settle_force_n=self.settle_force_n)
+
     # -- derived from the model --------------------------------------------------------
     def check_model(self, model: BeadModel) -> None:
+        if self.release_tension:
+            self.release_stage().check_model(model)
         unknown = set(self.expansion) - set(model.family_names)
         if unknown:
             raise InputError(f"crimp.expansion names families {sorted(unknown)} that the fabric "
@@ -368,6 +395,12 @@ class Crimp:
                              "fabmd test, fabmd.pipeline.run_crimp, or "
                              "fabmd.loose_height.pin_crimp, which returns the scene to crimp)")
         engine = engine or Engine()
+        if self.release_tension:  # the crimp (and its searches) first, then the release
+            self.check_model(model)
+            woven = dataclasses.replace(self, release_tension=False).run(
+                model, out, engine=engine, overwrite=overwrite, resume=resume,
+                figures=figures, quiet=quiet)
+            return release_crimped(self, woven, engine, figures=figures)
         if self.target_tension is not None:
             from .crimp_tension import crimp_to_tension
 
@@ -412,6 +445,33 @@ class CrimpResult:
     summary: dict
 
 
+#: the crimp folder's subfolder of the release (``Crimp.release_tension``)
+RELEASE_DIR = "release"
+
+
+def release_crimped(crimp: Crimp, woven: CrimpResult, engine: Engine,
+                    figures: bool = True) -> CrimpResult:
+    """Release the woven cell of ``woven`` (:meth:`Crimp.release_stage`, in its folder's
+    ``release/``); the result is the released cell, its summary the crimp's with
+    ``crimped`` the released cell's measures, ``woven`` the woven cell's and ``released``
+    the release's (written back to the crimp's ``summary.json``)."""
+    from .release import RELEASE_KEYS
+
+    release = crimp.release_stage().run(woven.model, Path(woven.run_dir) / RELEASE_DIR,
+                                        engine=engine, overwrite=True)
+    rs = release.summary
+    summary = dict(woven.summary)
+    summary.update(woven=summary["crimped"], crimped=rs["released"],
+                   areal_density_kg_m2=rs["areal_density_kg_m2"],
+                   released={k: rs[k] for k in RELEASE_KEYS})
+    if mpi.is_root():
+        write_json(Path(woven.run_dir) / "summary.json", summary)
+        if figures:
+            preview_png(release.model, Path(release.run_dir) / "sections.png",
+                        title="Released: the as-woven cell without its weaving tension")
+    return CrimpResult(Path(woven.run_dir), release.model, summary)
+
+
 def with_room_in_z(model: BeadModel, margin_diameters: float = 6.0) -> BeadModel:
     """The model with at least ``margin_diameters`` bead diameters of box above and below."""
     z = model.positions[:, 2]
@@ -425,9 +485,20 @@ def with_room_in_z(model: BeadModel, margin_diameters: float = 6.0) -> BeadModel
     return BeadModel(**{**model.__dict__, "box_lo": box_lo, "box_hi": box_hi})
 
 
-def load_crimped(run_dir: Path) -> BeadModel:
-    """The as-woven model LAMMPS wrote (``crimped.data`` + the loose model's metadata)."""
+def has_release(run_dir: Path) -> bool:
+    """Did the crimp in ``run_dir`` end with a finished release (``release/``)?"""
+    return (Path(run_dir) / RELEASE_DIR / "summary.json").exists()
+
+
+def load_crimped(run_dir: Path, released: bool = True) -> BeadModel:
+    """The crimp stage's product: the released cell where the crimp released its weaving
+    tension (``release/``, unless ``released`` is False), else the as-woven model LAMMPS
+    wrote (``crimped.data`` + the loose model's metadata)."""
     run_dir = Path(run_dir)
+    if released and has_release(run_dir):
+        from .release import load_released
+
+        return load_released(run_dir / RELEASE_DIR)
     meta = run_dir / f"{CRIMPED}.json"
     if not meta.exists():
         meta = run_dir / "model.json"
