@@ -44,8 +44,8 @@ def released_folder(scene, crimp_dir: Path, out: Path, tension: str, engine: Eng
 
 def test_cells(summary: dict) -> str:
     """F_norm at the report angles, locking angle and flagged intervals of one test."""
-    forces = " / ".join(f"{float(v):.3g}" for v in summary["normalised_force_at_angle_n_m"]
-                        .values())
+    forces = " / ".join("–" if v is None else f"{float(v):.3g}"
+                        for v in summary["normalised_force_at_angle_n_m"].values())
     lock = summary.get("locking_angle_deg")
     flagged = summary["quasi_static_intervals"]["flagged"]
     return (f"{forces} | {'–' if lock is None else f'{lock:.1f}'} | "
@@ -59,10 +59,12 @@ def main() -> None:
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--tensions", nargs="+", required=True)
     p.add_argument("--periodic", action="store_true", help="run the periodic shear too")
-    p.add_argument("--np", type=int, default=1)
+    p.add_argument("--np", type=int, default=1, help="MPI ranks of each run")
     args = p.parse_args()
     scene = load_scene(args.scene)
-    engine = Engine(np=args.np, progress=False)
+    # several ranks: each run as 'mpirun -np N lmp' (this script itself runs on one)
+    engine = Engine(progress=False) if args.np == 1 else \
+        Engine(backend="standalone", ranks=args.np, progress=False)
     tests = ["picture-frame"] + (["periodic-shear"] if args.periodic else [])
     rows = []
     for tension in args.tensions:

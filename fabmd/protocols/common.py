@@ -43,6 +43,22 @@ class RunResult:
         """The protocol's plot(s) into the run folder (none by default)."""
 
 
+@dataclass
+class StateResult:
+    """A stage that leaves a fabric state for the next (a coupon, a released cell): its run
+    folder, the state and the stage's summary."""
+
+    run_dir: Path
+    model: BeadModel
+    summary: dict
+
+
+def load_state(run_dir: Path, stem: str) -> BeadModel:
+    """A saved fabric state of a run folder (``<stem>.data`` + ``<stem>.json``)."""
+    run_dir = Path(run_dir)
+    return BeadModel.load(run_dir / f"{stem}.data", run_dir / f"{stem}.json")
+
+
 def input_name(protocol: str) -> str:
     """``in.<protocol>``: the input file name of a protocol."""
     return f"in.{protocol}"

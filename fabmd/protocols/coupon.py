@@ -35,6 +35,8 @@ from ..scene.quasi_static import QuasiStatic, relaxation_settled
 from ..scene.templates import render, render_inline
 from .common import (
     DATA_FILE,
+    StateResult,
+    load_state,
     open_run_folder,
     overlap_summary,
     run_with_trajectory,
@@ -236,14 +238,10 @@ class Coupon:
         return CouponResult(Path(run_dir), load_coupon(run_dir), summary)
 
 
-@dataclass
-class CouponResult:
-    run_dir: Path
-    model: BeadModel
-    summary: dict
+#: the coupon stage's result: run folder, coupon state, summary
+CouponResult = StateResult
 
 
 def load_coupon(run_dir: Path) -> BeadModel:
     """A saved coupon state (``coupon.data`` + ``coupon.json``)."""
-    run_dir = Path(run_dir)
-    return BeadModel.load(run_dir / f"{COUPON}.data", run_dir / f"{COUPON}.json")
+    return load_state(run_dir, COUPON)

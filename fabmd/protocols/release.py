@@ -44,7 +44,15 @@ from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.quasi_static import QuasiStatic
 from ..scene.templates import render
-from .common import DATA_FILE, open_run_folder, overlap_summary, run_folder, scene_dict
+from .common import (
+    DATA_FILE,
+    StateResult,
+    load_state,
+    open_run_folder,
+    overlap_summary,
+    run_folder,
+    scene_dict,
+)
 
 PROTOCOL = "release"
 RELEASED = "released"
@@ -234,14 +242,10 @@ RELEASE_KEYS = ("settled", "steps", "stop", "time_constant_s", "cell_before_m", 
                 "membrane_force_left_n_m", "yarn_tension_released", "wall_s")
 
 
-@dataclass
-class ReleaseResult:
-    run_dir: Path
-    model: BeadModel
-    summary: dict
+#: the release's result: run folder, released cell, summary
+ReleaseResult = StateResult
 
 
 def load_released(run_dir: Path) -> BeadModel:
     """A released cell (``released.data`` + ``released.json``)."""
-    run_dir = Path(run_dir)
-    return BeadModel.load(run_dir / f"{RELEASED}.data", run_dir / f"{RELEASED}.json")
+    return load_state(run_dir, RELEASED)
