@@ -26,7 +26,7 @@ def test_release_refuses_bad_settings():
         Release(handling_tension="-1 N")
     with pytest.raises(InputError, match="crimp.release_tension must be true or false"):
         Crimp(release_tension="yes")
-    with pytest.raises(InputError, match="release.handling_tension"):
+    with pytest.raises(InputError, match="crimp.handling_tension"):
         Crimp(release_tension=True, handling_tension="lots")
 
 

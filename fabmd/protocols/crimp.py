@@ -168,7 +168,9 @@ class Crimp:
             inputs.positive("crimp.settle_force_n", self.settle_force_n)
         inputs.boolean("crimp.release_tension", self.release_tension)
         if self.release_tension:
-            self.release_stage()  # checks the handling tension
+            from .crimp_tension import check_target_tension
+
+            check_target_tension(self.handling_tension, "crimp.handling_tension")
         if self.crimp_by == "loose_height":
             self._check_loose_height()
         elif self.target_crimp_pct:
