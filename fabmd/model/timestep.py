@@ -47,3 +47,27 @@ def stable_time_step_s(beads, contacts: Iterable = (), policy: TimeStep | None =
     """The time step to run with [s]: ``policy`` (default :class:`TimeStep`) applied to
     :func:`critical_time_step_s`; raises ``InputError`` for an explicit step above it."""
     return (policy or TimeStep()).resolve(critical_time_step_s(beads, contacts))
+
+
+def fibre_transit_s(model) -> float:
+    """Time an axial wave takes along the model's longest fibre [s]: its bead count ×
+    √(m/k) of the stiffest-per-mass bead kind (the crimp's ramp, the preload ramp and the
+    release count their durations in these transits)."""
+    import math
+
+    import numpy as np
+
+    longest = int(np.bincount(model.fibre_ids).max())
+    return longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m)
+                         for b in model_bead_parameters(model))
+
+
+def berendsen_modulus_pa(model) -> float:
+    """The modulus guess [Pa] a Berendsen box control of a periodic fabric cell is given:
+    a hundredth of all fibres' E·A over the cell's section. A crimped fabric is far softer
+    in-plane than its fibres, and a guess above its modulus relaxes slowly (a tenth left a
+    fifth of the Twintex cell's tension after ten time constants); one far below it would
+    overshoot."""
+    lx, ly, lz = (model.box_hi - model.box_lo).tolist()
+    ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
+    return 0.01 * max(model.n_fibres, 1) * ea / (min(lx, ly) * lz)

@@ -23,7 +23,6 @@ crimped state is its last frame).
 from __future__ import annotations
 
 import dataclasses
-import math
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,7 +35,7 @@ from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
-from ..model.timestep import stable_time_step_s
+from ..model.timestep import fibre_transit_s, stable_time_step_s
 from ..results.cuts import cut_pngs
 from ..results.folder import read_print_file, write_csv, write_json
 from ..results.measure import areal_density_kg_m2, fabric_measures, passed_through
@@ -305,10 +304,7 @@ class Crimp:
 
     def derive_plan(self, model: BeadModel) -> RunPlan:
         dt = stable_time_step_s(model, [self.contact], self.time_step)
-        beads = model_bead_parameters(model)
-        longest = int(np.bincount(model.fibre_ids).max())
-        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
-        ramp = max(1000, int(self.ramp_transits * transit / dt))
+        ramp = max(1000, int(self.ramp_transits * fibre_transit_s(model) / dt))
         steps = ramp + self.quasi_static.max_steps // 4
         return RunPlan(time_step_s=dt, steps=steps, every=max(1, steps // self.samples),
                        duration_s=steps * dt, extra={"ramp_steps": ramp})
@@ -434,7 +430,7 @@ class Crimp:
                 warn_interchange(run_dir, summary, stacklevel=3)
         summary = mpi.bcast_json(summary)
         if crimped is None:
-            crimped = load_crimped(run_dir)
+            crimped = load_crimped(run_dir, released=False)
         return CrimpResult(Path(run_dir), crimped, summary)
 
 

@@ -33,6 +33,7 @@ import numpy as np
 from .. import inputs
 from ..errors import InputError
 from ..model.bead_model import BeadModel
+from ..model.timestep import berendsen_modulus_pa
 from ..results.curves import bilinear_fit, locking_angle, tangent_intersection, values_at
 from ..results.figure import report_marks
 from ..scene.drag import AffineField, affine_force_names
@@ -293,13 +294,7 @@ class PeriodicShear(_PeriodicCellTest):
     def transverse_block(self, model: BeadModel) -> str:
         if not self.release_tension:
             return "# the cell keeps its size: the yarns keep the crimp stage's tension"
-        lx, ly, lz = self.cell(model)
-        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
-        # Berendsen's modulus: a hundredth of all fibres' E·A over the section. A crimped
-        # fabric is far softer in-plane than its fibres, and a guess above its modulus
-        # relaxes slowly (a tenth left a fifth of the Twintex cell's tension after ten
-        # time constants); one far below it would overshoot
-        modulus = 0.01 * max(model.n_fibres, 1) * ea / (min(lx, ly) * lz)
+        modulus = berendsen_modulus_pa(model)
         pdamp = self.release_fraction * self.duration_s(model)
         return render_inline("periodic_release", pdamp=pdamp, modulus=modulus,
                              settle_steps=math.ceil(10 * pdamp / self.time_step_s(model)))

@@ -52,7 +52,7 @@ from .. import inputs
 from ..analysis import FabricFrame, family_axes_deg
 from ..errors import InputError
 from ..model.bead_model import BeadModel, BondType
-from ..model.beads import model_bead_parameters
+from ..model.timestep import fibre_transit_s
 from ..results.curves import locking_angle, values_at
 from ..results.fibre_angles import fibre_shear_angles
 from ..results.figure import report_marks
@@ -334,10 +334,8 @@ class PictureFrame(ClampedTest):
             return "# no clamping preload"
         s = self.pretension_strain
         slack = s < 0  # mounting slack: the rest length grows
-        beads = model_bead_parameters(model)
-        longest = int(np.bincount(model.fibre_ids).max())
-        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
-        steps = max(1000, int(self.pretension_transits * transit / self.time_step_s(model)))
+        steps = max(1000, int(self.pretension_transits * fibre_transit_s(model)
+                              / self.time_step_s(model)))
         return render("pretension", strain=abs(s), held="clamps", free="free",
                       what="mounting slack" if slack else "clamping preload",
                       change="grows" if slack else "shrinks",

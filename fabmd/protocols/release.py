@@ -36,7 +36,7 @@ from ..errors import InputError, QuasiStaticWarning
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
-from ..model.timestep import stable_time_step_s
+from ..model.timestep import berendsen_modulus_pa, fibre_transit_s, stable_time_step_s
 from ..results.folder import read_print_file, write_json
 from ..results.measure import areal_density_kg_m2, fabric_measures
 from ..results.run_record import read_run_end
@@ -119,15 +119,14 @@ class Release:
     def time_constant_s(self, model: BeadModel) -> float:
         """Berendsen's time constant [s]: ``time_constant_transits`` axial wave transits
         of the longest fibre (bead count × √(m/k), as the crimp's ramp)."""
-        beads = model_bead_parameters(model)
-        longest = int(np.bincount(model.fibre_ids).max())
-        transit = longest * max(math.sqrt(b.mass_kg / b.spring_n_per_m) for b in beads)
-        return self.time_constant_transits * transit
+        return self.time_constant_transits * fibre_transit_s(model)
 
     def reference_force_n(self, model: BeadModel) -> float:
+        from .crimp import SETTLE_STRAIN
+
         if self.settle_force_n is not None:
             return float(self.settle_force_n)
-        return 1e-3 * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
+        return SETTLE_STRAIN * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
 
     def membrane_target_n_m(self, model: BeadModel) -> tuple[float, float]:
         """(N_xx, N_yy) [N/m] of the handling tension: each yarn's tension over the cell's
@@ -150,16 +149,11 @@ class Release:
         self.check_model(model)
         dt = self.time_step_s(model)
         beads = model_bead_parameters(model)
-        lx, ly, lz = (model.box_hi - model.box_lo).tolist()
-        ea = max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)
+        lz = float(model.box_hi[2] - model.box_lo[2])
         k = max(bt.spring_n_per_m for bt in model.bond_type_table)
         f_ref = self.reference_force_n(model)
         pdamp = self.time_constant_s(model)
-        # Berendsen's modulus: a hundredth of all fibres' E·A over the section. A crimped
-        # fabric is far softer in-plane than its fibres, and a guess above its modulus
-        # relaxes slowly (a tenth left a fifth of the Twintex cell's tension after ten
-        # time constants); one far below it would overshoot
-        modulus = 0.01 * max(model.n_fibres, 1) * ea / (min(lx, ly) * lz)
+        modulus = berendsen_modulus_pa(model)
         check = self.quasi_static.check_every
         every = max(1, check // 50)
         qs = self.quasi_static
