@@ -46,7 +46,7 @@ from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
-from ..scene.quasi_static import Damping, QuasiStatic
+from ..scene.quasi_static import SETTLE_STRAIN, Damping, QuasiStatic
 from ..scene.templates import render
 from .common import DATA_FILE, open_run_folder, overlap_summary, run_with_trajectory, scene_dict
 from .crimp_balance import crimp_interchange, warn_interchange
@@ -55,9 +55,6 @@ PROTOCOL = "crimp"
 CRIMPED = "crimped"
 #: what may reach a family's crimp (``Crimp.crimp_by``, ``CrimpTargets.crimp_by``)
 CRIMP_BY = ("expansion", "loose_height")
-#: a crimp that states no settle force is judged at rest against the force this fibre
-#: strain gives, E·A × 1e-3 (1 cN/tex, a weaving tension, strains glass 0.035 %)
-SETTLE_STRAIN = 1e-3
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ from ..results.measure import areal_density_kg_m2, fabric_measures
 from ..results.run_record import read_run_end
 from ..results.yarn_tension import yarn_tension
 from ..scene import blocks
-from ..scene.quasi_static import QuasiStatic
+from ..scene.quasi_static import SETTLE_STRAIN, QuasiStatic
 from ..scene.templates import render
 from .common import (
     DATA_FILE,
@@ -122,8 +122,6 @@ class Release:
         return self.time_constant_transits * fibre_transit_s(model)
 
     def reference_force_n(self, model: BeadModel) -> float:
-        from .crimp import SETTLE_STRAIN
-
         if self.settle_force_n is not None:
             return float(self.settle_force_n)
         return SETTLE_STRAIN * max(bt.bond_axial_stiffness_n for bt in model.bond_type_table)

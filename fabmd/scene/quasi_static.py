@@ -32,6 +32,11 @@ from .templates import render
 DAMPING_KINDS = ("cundall", "viscous", "none")
 
 
+#: a crimp (or release) that states no settle force is judged at rest against the force
+#: this fibre strain gives, E·A × 1e-3 (1 cN/tex, a weaving tension, strains glass 0.035 %)
+SETTLE_STRAIN = 1e-3
+
+
 @dataclass(frozen=True)
 class Damping:
     """Numerical damping for quasi-static relaxation.
