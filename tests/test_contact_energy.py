@@ -232,7 +232,8 @@ def test_the_picture_frame_prints_the_relative_kinetic_energy(tmp_path):
     assert "variable        ke_rel_atom atom" in (r.run_dir / "in.picture_frame").read_text()
     mid = (c["shear_angle_deg"] > 10) & (c["shear_angle_deg"] < 25)
     assert np.all(c["kinetic_relative_j"][mid] < 0.2 * c["kinetic_energy_j"][mid])
-    assert np.all(c["contact_energy_j"] > 0)
+    # sampled at every output step (a loose fabric may start without an overlap)
+    assert np.all(c["contact_energy_j"] >= 0) and c["contact_energy_j"][-1] > 0
     assert "contacts' elastic energy" in r.summary["elastic_energy"]
     assert "affine" in r.summary["kinetic_energy"]
     u_all = c["strain_energy_j"] + c["contact_energy_j"]

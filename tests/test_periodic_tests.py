@@ -180,3 +180,23 @@ def test_a_released_cell_loses_its_crimp_tension_and_shears_from_its_own_size(wo
     left = released["membrane_force_at_start_n_m"]
     assert left[0] == pytest.approx(n_released, rel=1e-6)
     assert all(0 < abs(n) < 0.2 * abs(n_kept) for n in left), (left, n_kept)
+
+
+@pytest.mark.lammps
+@pytest.mark.filterwarnings("ignore::fabmd.errors.QuasiStaticWarning")
+def test_a_cell_started_with_its_box_needs_no_start_up(woven_cell, tmp_path):
+    """Trellis shear at 4e-3: a smooth start puts 0.034 of the box's work over 0-5° into
+    the cell's kinetic energy (measured; flagged), a cell started with the box's affine
+    velocity field 0.001, and past the start both read the same force."""
+    runs = [PeriodicShear(max_shear_angle_deg=25, speed_fraction=4e-3, start=start).run(
+        woven_cell, tmp_path / start, engine=Engine(progress=False))
+        for start in ("smooth", "affine")]
+    smooth, started = ([i["inertia_share"] for i in r.summary["quasi_static_intervals"]
+                        ["intervals"][:1]][0] for r in runs)
+    assert smooth > 0.02 and started < 0.5 * 0.03 and started < 0.2 * smooth
+    ke0 = [r.curve["kinetic_energy_j"][0] for r in runs]
+    assert ke0[0] < 1e-6 * ke0[1]  # at rest, or moving with the box
+    for angle in ("10", "20"):
+        assert (runs[1].summary["normalised_force_at_angle_n_m"][angle]
+                == pytest.approx(runs[0].summary["normalised_force_at_angle_n_m"][angle],
+                                 rel=0.01))

@@ -42,6 +42,7 @@ import numpy as np
 
 from .. import inputs
 from ..engine import Engine, mpi
+from ..errors import InputError
 from ..model.bead_model import BeadModel
 from ..model.beads import TimeStep, model_bead_parameters
 from ..model.contact import ContactModel
@@ -62,6 +63,7 @@ from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
+from ..scene.start import START_KINDS
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, open_run_folder, run_with_trajectory, scene_dict
 from .driven_outputs import (
@@ -125,7 +127,15 @@ class DrivenTest:
         speed_fraction: speed of the driven boundary (clamp, corner, box face, punch)
             over the fibres' axial wave speed, in (0, 0.05] (quasi-static when small;
             check with ``check_rate``).
-        ramp_fraction: share of the test spent reaching full speed smoothly, in [0, 0.9].
+        ramp_fraction: share of the test spent reaching full speed smoothly, in [0, 0.9]
+            (``start = "smooth"``).
+        start: how the loading starts (:mod:`fabmd.scene.start`): ``"smooth"`` (the
+            tools reach full speed over ``ramp_fraction`` of the test, from a fabric at
+            rest) or ``"affine"`` (the free fabric starts with the tools' affine velocity
+            and the tools at full speed: they need not accelerate the fabric they carry;
+            protocols with an affine field and a fixed speed). None (default):
+            ``"affine"`` where the protocol can (picture frame, periodic cells) at a fixed
+            speed, else ``"smooth"`` (:meth:`start_kind`).
         damping_time_s: τ of the drag γ = m/τ on the free beads [s] (default: a tenth
             of the test).
         contact: fibre–fibre contact.
@@ -137,6 +147,7 @@ class DrivenTest:
 
     speed_fraction: float = 1e-4
     ramp_fraction: float = 0.1
+    start: str | None = None
     damping_time_s: float | None = None
     contact: ContactModel = field(default_factory=ContactModel)
     time_step: TimeStep = field(default_factory=TimeStep)
@@ -150,6 +161,8 @@ class DrivenTest:
     quasi_static_limits: ClassVar[dict[str, float]] = QUASI_STATIC_LIMITS
     #: (curve column, interval width) of the per-interval quasi-static verdict (None: none)
     interval_axis: ClassVar[tuple[str, float] | None] = None
+    #: whether the protocol can start the fabric with its tools' affine field (``start``)
+    affine_start_supported: ClassVar[bool] = False
     #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
     quasi_static_note: ClassVar[str] = ("kinetic energy over the elastic energy (bonds and "
                                         "contacts: elastic_energy) and over the work done "
@@ -201,10 +214,25 @@ class DrivenTest:
         return min(b.wave_speed_m_s for b in model_bead_parameters(model))
 
     def nominal_loading(self, model: BeadModel) -> SmoothStartSpeed:
-        """Boundary speed ``speed_fraction``·c, reached smoothly over ``ramp_fraction``."""
+        """Boundary speed ``speed_fraction``·c, reached smoothly over ``ramp_fraction``
+        (at once where the fabric starts moving with the tools, ``start = "affine"``)."""
         v = self.speed_fraction * self.wave_speed_m_s(model)
         total = self.travel_m(model) / v
+        if self.start_kind() == "affine":
+            return SmoothStartSpeed(v, 0.0)
         return SmoothStartSpeed(v, self.ramp_fraction * total / (1 - self.ramp_fraction / 2))
+
+    def adaptive_loading(self) -> bool:
+        """Whether the speed is adapted as the test goes (``loading_speed.adaptive``)."""
+        return bool(getattr(getattr(self, "loading_speed", None), "adaptive", False))
+
+    def start_kind(self) -> str:
+        """``start``, or where None: ``"affine"`` if the protocol can start the fabric with
+        its tools at a fixed speed, else ``"smooth"``."""
+        if self.start is not None:
+            return self.start
+        return ("affine" if self.affine_start_supported and not self.adaptive_loading()
+                else "smooth")
 
     def loading(self, model: BeadModel) -> SmoothStartSpeed:
         """The nominal loading, a hair slower (less than one output interval over the test)
@@ -302,6 +330,15 @@ class DrivenTest:
         name = self.protocol
         inputs.in_range(f"{name}.speed_fraction", self.speed_fraction, 0, 0.05, low_open=True)
         inputs.in_range(f"{name}.ramp_fraction", self.ramp_fraction, 0, 0.9)
+        if self.start is not None:
+            inputs.one_of(f"{name}.start", self.start, START_KINDS)
+        if self.start == "affine" and not self.affine_start_supported:
+            raise InputError(f"{name}.start = \"affine\": {name} has no affine field of its "
+                             f"tools to start the fabric with; use \"smooth\"")
+        if self.start == "affine" and self.adaptive_loading():
+            raise InputError(f"{name}.start = \"affine\" starts at the full fixed speed; "
+                             f"adaptive loading (loading_speed.adaptive = true) starts "
+                             f"smoothly: use start = \"smooth\"")
         self.check_positive_or_none("damping_time_s")
         inputs.positive_int(f"{name}.samples", self.samples, minimum=10)
         check_trajectory(f"{name}.trajectory", self.trajectory)

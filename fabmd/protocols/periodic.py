@@ -40,6 +40,7 @@ from ..scene.drag import AffineField, affine_force_names
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
+from ..scene.start import affine_start
 from ..scene.templates import fmt, render, render_inline
 from .driven import DrivenResult, RelaxedDrivenTest
 from .driven_outputs import energy_columns, read_outputs
@@ -82,6 +83,8 @@ class _PeriodicCellTest(RelaxedDrivenTest):
     def transverse_block(self, model: BeadModel) -> str:
         return "# transverse size held"
 
+    affine_start_supported = True
+
     #: the entries of the box's velocity gradient L = ḣ·h⁻¹ that the test moves (LAMMPS
     #: variables of ``periodic_cell.lmp``)
     box_gradient: ClassVar[dict[str, str]] = {}
@@ -115,8 +118,17 @@ class _PeriodicCellTest(RelaxedDrivenTest):
                       relax=self.relax_block(model, "clamps", "free", 1e-3 * ea),
                       box_motion=self.box_motion(model), damping=damping,
                       transverse=self.transverse_block(model), gamma=self.gamma(model),
-                      drag_fx=refs["x"], drag_fy=refs["y"], outputs=outputs)
+                      drag_fx=refs["x"], drag_fy=refs["y"], outputs=outputs,
+                      start=self.start_block(field))
         return self.scene_text(model, dt, text)
+
+    def start_block(self, field: AffineField) -> str:
+        """The cell's start (``start``): at rest, or with the box's affine velocity field
+        at the start (its gradient's variables read the box when LAMMPS gets there: after
+        the release, if any)."""
+        if self.start_kind() != "affine":
+            return "# the fabric starts at rest: the box's speed ramps up smoothly"
+        return affine_start("free", field)
 
     def _schedule(self, model: BeadModel) -> dict[str, str]:
         """Boundary travel s(t) [m] and its rate [m/s] as LAMMPS expressions."""
@@ -132,6 +144,7 @@ class _PeriodicCellTest(RelaxedDrivenTest):
             "time_step_s": plan.time_step_s,
             "steps": plan.steps,
             "boundary_speed_m_s": plan.loading.speed_m_s,
+            "start": self.start_kind(),
             **self.quasi_static_evidence(out, model, progress),
         }
 

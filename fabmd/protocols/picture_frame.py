@@ -69,6 +69,7 @@ from ..scene.adaptive import (
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
+from ..scene.start import affine_start
 from ..scene.templates import fmt, render
 from .driven import ClampedTest, DrivenResult, clamp_power
 from .driven_outputs import energy_columns, read_outputs
@@ -193,6 +194,7 @@ class PictureFrame(ClampedTest):
     """
 
     protocol = PROTOCOL
+    affine_start_supported = True
     interval_axis = ("shear_angle_deg", 5.0)
     rate_curve = ("shear_angle_deg", "normalised_force_n_m")
     rate_keys = {
@@ -384,8 +386,21 @@ class PictureFrame(ClampedTest):
                       ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
                       y_hi=g.inner[3], pretension=self.pretension_block(model),
                       relax=self.relax_block(model, "clamps", "free", ref_force),
-                      **motion, damping=damping, outputs=outputs)
+                      **motion, damping=damping, start=self.start_block(model),
+                      outputs=outputs)
         return self.scene_text(model, dt, text)
+
+    def start_block(self, model: BeadModel) -> str:
+        """The free fabric's start (``start``): at rest, or with the frame's affine
+        velocity at the start, v = L0·(r − A): at 0° the frame's gradient is
+        L0 = [[0, p0], [p0, 0]], p0 = ḋ/(√2·L) (ḋ the corner's speed, L the arm)."""
+        if self.start_kind() != "affine":
+            return "# the fabric starts at rest: the frame's speed ramps up smoothly"
+        g = self.frame(model)
+        p0 = fmt(self.loading(model).speed_m_s / (math.sqrt(2) * g.frame_length_m))
+        field = AffineField(origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xy=p0, yx=p0,
+                            tools="frame")
+        return affine_start("free", field)
 
     def corner_travel(self, model: BeadModel) -> str:
         """LAMMPS formula of the pulled corner's travel d [m], read back from the clamps'
@@ -482,6 +497,7 @@ def reduce(run_dir: Path, model: BeadModel, test: PictureFrame,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
         "corner_speed_m_s": plan.loading.speed_m_s,
+        "start": test.start_kind(),
         **adaptive_summary(plan, out["step"], out["time_s"],
                            out.columns.get("corner_speed_m_s")),
         "max_displacement_m": dmax,
