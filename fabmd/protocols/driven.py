@@ -166,8 +166,8 @@ class DrivenTest:
     #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
     quasi_static_note: ClassVar[str] = ("kinetic energy over the elastic energy (bonds and "
                                         "contacts: elastic_energy) and over the work done "
-                                        "so far, after the smooth start and the first tenth "
-                                        "of the test")
+                                        "so far, after the smooth start (if any) and the "
+                                        "first tenth of the test")
 
     # -- to be defined by the protocol ---------------------------------------------
     def travel_m(self, model: BeadModel) -> float:
@@ -492,8 +492,8 @@ class ClampedTest(RelaxedDrivenTest):
     quasi_static_note = (
         "kinetic energy of the free fabric (relative to the clamps' or frame's affine field: "
         "kinetic_energy) over the elastic energy (bonds and contacts: elastic_energy) and "
-        "over the work done so far, after the smooth start and the first tenth of the "
-        "displacement")
+        "over the work done so far, after the smooth start (if any) and the first tenth of "
+        "the displacement")
 
     @staticmethod
     def clamp_edges(x: np.ndarray, low_m: float, high_m: float) -> tuple[float, float]:

@@ -112,9 +112,9 @@ def kinetic_to_work_ratio(out: Outputs, started: np.ndarray) -> float | None:
     return _largest_ratio(ke[started], out.external_work_j[started])
 
 
-STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start, the first "
-                "tenth of the test, and once the strain energy gained exceeds 1 % of its final "
-                "gain (a slack fabric carries no load at first)")
+STARTED_NOTE = ("kinetic/strain energy after start-up: after the smooth start (if any), "
+                "the first tenth of the test, and once the strain energy gained exceeds 1 % of "
+                "its final gain (a slack fabric carries no load at first)")
 
 
 def started_mask(out: Outputs, loading: SmoothStartSpeed, progress: np.ndarray,
