@@ -345,7 +345,7 @@ def test_the_start_is_checked():
 
     with pytest.raises(InputError, match="picture_frame.start"):
         PictureFrame(start="fast")
-    with pytest.raises(InputError, match="tension.start"):  # no affine field to start with
+    with pytest.raises(InputError, match="tension.start"):  # not built for the tension
         Tension(start="affine")
     with pytest.raises(InputError, match="adaptive"):
         PictureFrame(start="affine", loading_speed=AdaptiveLoading(adaptive=True))

@@ -333,8 +333,8 @@ class DrivenTest:
         if self.start is not None:
             inputs.one_of(f"{name}.start", self.start, START_KINDS)
         if self.start == "affine" and not self.affine_start_supported:
-            raise InputError(f"{name}.start = \"affine\": {name} has no affine field of its "
-                             f"tools to start the fabric with; use \"smooth\"")
+            raise InputError(f"{name}.start = \"affine\" is built for the picture frame and "
+                             f"the periodic cells only; use \"smooth\"")
         if self.start == "affine" and self.adaptive_loading():
             raise InputError(f"{name}.start = \"affine\" starts at the full fixed speed; "
                              f"adaptive loading (loading_speed.adaptive = true) starts "
