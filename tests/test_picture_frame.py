@@ -345,14 +345,17 @@ def test_the_start_is_checked():
 
     with pytest.raises(InputError, match="picture_frame.start"):
         PictureFrame(start="fast")
-    with pytest.raises(InputError, match="tension.start"):  # not built for the tension
-        Tension(start="affine")
+    from fabmd.protocols.bias_extension import BiasExtension
+
+    with pytest.raises(InputError, match="bias_extension.start"):  # not built for it
+        BiasExtension(start="affine")
     with pytest.raises(InputError, match="adaptive"):
         PictureFrame(start="affine", loading_speed=AdaptiveLoading(adaptive=True))
     # by default: with the frame at a fixed speed, smoothly where the speed adapts
     assert PictureFrame().start_kind() == "affine"
     assert PictureFrame(loading_speed=AdaptiveLoading(adaptive=True)).start_kind() == "smooth"
-    assert Tension().start_kind() == "smooth"
+    assert Tension().start_kind() == "smooth"  # the tension's affine start is asked for
+    assert Tension(start="affine").start_kind() == "affine"
 
 
 @pytest.mark.lammps

@@ -195,3 +195,32 @@ def test_the_optical_gauge_follows_two_cross_sections_between_the_clamps():
     assert "gauge" not in plain.replace("gauge length", "")
     with pytest.raises(InputError, match="tension.gauge_fraction"):
         Tension(gauge_fraction=1.0)
+
+
+@pytest.mark.filterwarnings("ignore::fabmd.errors.QuasiStaticWarning")
+def test_fibres_started_with_the_clamps_stretch_from_the_first_step(tmp_path):
+    """``start = "affine"`` (asked for): straight fibres start with the clamps' uniform
+    stretch, v = 2 v0 (x − x0)/(x_right − x_left), so their kinetic energy at the first
+    sample is that field's, the first interval takes no inertia the smooth start's does,
+    and the force is still n·E·A·ε."""
+    n = 4
+    coupon = parallel_fibres(n=n)
+    runs = {start: Tension(max_elongation_pct=1.2, start=start, speed_fraction=4e-4,
+                           trajectory=TrajectoryOutput(frames=0)).run(
+        coupon, tmp_path / start, engine=Engine(progress=False))
+        for start in ("smooth", "affine")}
+    affine = runs["affine"]
+    left, right, _ = Tension().clamps(coupon)
+    free = (coupon.positions[:, 0] > left) & (coupon.positions[:, 0] < right)
+    rate = 2 * affine.summary["clamp_speed_m_s"] / (right - left)
+    x = coupon.positions[free, 0] - 0.5 * (left + right)
+    field = 0.5 * np.sum(coupon.masses[free] * (rate * x) ** 2)
+    assert affine.curve["kinetic_energy_j"][0] == pytest.approx(field, rel=0.02)
+    assert [r.summary["start"] for r in runs.values()] == ["smooth", "affine"]
+    ea = SOFT_GLASS.modulus_pa * 3.14159265 * 0.5e-3**2 / 4
+    for strain in (0.5, 1.0):
+        assert affine.summary["force_at_elongation_n"][f"{strain:g}"] == pytest.approx(
+            n * ea * strain / 100, rel=0.02)
+    first = [r.summary["quasi_static_intervals"]["intervals"][0]["inertia_share"]
+             for r in runs.values()]
+    assert first[1] < 0.2 * first[0], first

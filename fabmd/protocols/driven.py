@@ -135,7 +135,8 @@ class DrivenTest:
             and the tools at full speed: they need not accelerate the fabric they carry;
             protocols with an affine field and a fixed speed). None (default):
             ``"affine"`` where the protocol can (picture frame, periodic cells) at a fixed
-            speed, else ``"smooth"`` (:meth:`start_kind`).
+            speed, else ``"smooth"`` (:meth:`start_kind`; the tension takes ``"affine"``
+            when asked).
         damping_time_s: τ of the drag γ = m/τ on the free beads [s] (default: a tenth
             of the test).
         contact: fibre–fibre contact.
@@ -163,6 +164,8 @@ class DrivenTest:
     interval_axis: ClassVar[tuple[str, float] | None] = None
     #: whether the protocol can start the fabric with its tools' affine field (``start``)
     affine_start_supported: ClassVar[bool] = False
+    #: whether ``start = None`` means ``"affine"`` where it is supported (at a fixed speed)
+    affine_start_default: ClassVar[bool] = True
     #: what the kinetic-energy measures of the summary cover (:meth:`quasi_static_evidence`)
     quasi_static_note: ClassVar[str] = ("kinetic energy over the elastic energy (bonds and "
                                         "contacts: elastic_energy) and over the work done "
@@ -231,8 +234,8 @@ class DrivenTest:
         its tools at a fixed speed, else ``"smooth"``."""
         if self.start is not None:
             return self.start
-        return ("affine" if self.affine_start_supported and not self.adaptive_loading()
-                else "smooth")
+        return ("affine" if self.affine_start_supported and self.affine_start_default
+                and not self.adaptive_loading() else "smooth")
 
     def loading(self, model: BeadModel) -> SmoothStartSpeed:
         """The nominal loading, a hair slower (less than one output interval over the test)
@@ -333,8 +336,8 @@ class DrivenTest:
         if self.start is not None:
             inputs.one_of(f"{name}.start", self.start, START_KINDS)
         if self.start == "affine" and not self.affine_start_supported:
-            raise InputError(f"{name}.start = \"affine\" is built for the picture frame and "
-                             f"the periodic cells only; use \"smooth\"")
+            raise InputError(f"{name}.start = \"affine\" is built for the picture frame, "
+                             f"the periodic cells and the tension only; use \"smooth\"")
         if self.start == "affine" and self.adaptive_loading():
             raise InputError(f"{name}.start = \"affine\" starts at the full fixed speed; "
                              f"adaptive loading (loading_speed.adaptive = true) starts "

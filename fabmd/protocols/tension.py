@@ -33,6 +33,7 @@ from ..scene.adaptive import (
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
+from ..scene.start import affine_start
 from ..scene.templates import fmt, render
 from .driven import DrivenResult, rigid_clamp_power
 from .driven_outputs import energy_columns, read_outputs
@@ -63,6 +64,10 @@ class Tension(EndClampedTest):
     """
 
     protocol = PROTOCOL
+    #: the fabric may start with the clamps' uniform stretch (``start = "affine"``, asked
+    #: for): not the default, since a slack coupon straightens rather than stretches
+    affine_start_supported = True
+    affine_start_default = False
     interval_axis = ("elongation_pct", 0.25)
     rate_curve = ("elongation_pct", "force_n")
     rate_keys = {"initial_stiffness_change": "initial_stiffness_n"}
@@ -158,8 +163,15 @@ class Tension(EndClampedTest):
                       + self.relax_block(model, "clamps", "free", ref_force),
                       displacement=displacement, velocity=velocity,
                       right_displacement=moves[0], left_displacement=moves[1],
-                      damping=damping, outputs=outputs)
+                      damping=damping, start=self.start_block(field), outputs=outputs)
         return self.scene_text(model, dt, text, extra, header=header)
+
+    def start_block(self, field: AffineField) -> str:
+        """The coupon's start (``start``): at rest, or with the clamps' uniform stretch
+        field at the start, v = 2·v0·(x − x0)/(x_right − x_left)."""
+        if self.start_kind() != "affine":
+            return "# the fabric starts at rest: the clamps' speed ramps up smoothly"
+        return affine_start("free", field)
 
     def clamp_travel(self, model: BeadModel) -> str:
         """LAMMPS formula of the clamps' mean travel [m] from their centres of mass (each
@@ -228,6 +240,7 @@ def reduce(run_dir: Path, coupon: BeadModel, test: Tension,
         "time_step_s": plan.time_step_s,
         "steps": plan.steps,
         "clamp_speed_m_s": plan.loading.speed_m_s,
+        "start": test.start_kind(),
         **adaptive_summary(plan, out["step"], out["time_s"], out.columns.get("clamp_speed_m_s")),
         "initial_stiffness_n": fit["initial_slope"] * 100,  # N per unit strain
         "final_stiffness_n": fit["final_slope"] * 100,
