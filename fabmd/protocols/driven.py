@@ -63,7 +63,7 @@ from ..scene.loading import SmoothStartSpeed
 from ..scene.outputs import TrajectoryOutput, check_trajectory
 from ..scene.plan import RunPlan, cached_plan, read_plan
 from ..scene.quasi_static import QuasiStatic, relaxation_settled
-from ..scene.start import START_KINDS
+from ..scene.start import START_KINDS, affine_start
 from ..scene.templates import render
 from .common import DATA_FILE, RunResult, open_run_folder, run_with_trajectory, scene_dict
 from .driven_outputs import (
@@ -236,6 +236,14 @@ class DrivenTest:
             return self.start
         return ("affine" if self.affine_start_supported and self.affine_start_default
                 and not self.adaptive_loading() else "smooth")
+
+    def start_block(self, field: AffineField) -> str:
+        """LAMMPS text of the free fabric's start (``start``): at rest (a comment), or
+        with the tools' affine velocity ``field`` at the start (:mod:`fabmd.scene.start`;
+        its gradient must be valid before the run)."""
+        if self.start_kind() != "affine":
+            return f"# the fabric starts at rest: the {field.tools}' speed ramps up smoothly"
+        return affine_start("free", field)
 
     def loading(self, model: BeadModel) -> SmoothStartSpeed:
         """The nominal loading, a hair slower (less than one output interval over the test)

@@ -40,7 +40,6 @@ from ..scene.drag import AffineField, affine_force_names
 from ..scene.energy import ContactPower
 from ..scene.outputs import TrajectoryOutput
 from ..scene.plan import RunPlan
-from ..scene.start import affine_start
 from ..scene.templates import fmt, render, render_inline
 from .driven import DrivenResult, RelaxedDrivenTest
 from .driven_outputs import energy_columns, read_outputs
@@ -119,16 +118,10 @@ class _PeriodicCellTest(RelaxedDrivenTest):
                       box_motion=self.box_motion(model), damping=damping,
                       transverse=self.transverse_block(model), gamma=self.gamma(model),
                       drag_fx=refs["x"], drag_fy=refs["y"], outputs=outputs,
+                      # the box's gradient variables read the box when LAMMPS gets there:
+                      # after the release, if any
                       start=self.start_block(field))
         return self.scene_text(model, dt, text)
-
-    def start_block(self, field: AffineField) -> str:
-        """The cell's start (``start``): at rest, or with the box's affine velocity field
-        at the start (its gradient's variables read the box when LAMMPS gets there: after
-        the release, if any)."""
-        if self.start_kind() != "affine":
-            return "# the fabric starts at rest: the box's speed ramps up smoothly"
-        return affine_start("free", field)
 
     def _schedule(self, model: BeadModel) -> dict[str, str]:
         """Boundary travel s(t) [m] and its rate [m/s] as LAMMPS expressions."""

@@ -69,7 +69,6 @@ from ..scene.adaptive import (
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
-from ..scene.start import affine_start
 from ..scene.templates import fmt, render
 from .driven import ClampedTest, DrivenResult, clamp_power
 from .driven_outputs import energy_columns, read_outputs
@@ -386,21 +385,18 @@ class PictureFrame(ClampedTest):
                       ay=g.pin_a[1], x_lo=g.inner[0], x_hi=g.inner[1], y_lo=g.inner[2],
                       y_hi=g.inner[3], pretension=self.pretension_block(model),
                       relax=self.relax_block(model, "clamps", "free", ref_force),
-                      **motion, damping=damping, start=self.start_block(model),
-                      outputs=outputs)
+                      **motion, damping=damping,
+                      start=self.start_block(self.start_field(model)), outputs=outputs)
         return self.scene_text(model, dt, text)
 
-    def start_block(self, model: BeadModel) -> str:
-        """The free fabric's start (``start``): at rest, or with the frame's affine
-        velocity at the start, v = L0·(r − A): at 0° the frame's gradient is
+    def start_field(self, model: BeadModel) -> AffineField:
+        """The frame's affine velocity field at the start, v = L0·(r − A), in numbers (the
+        drag's field reads fixes not yet computed before the run): at 0° the gradient is
         L0 = [[0, p0], [p0, 0]], p0 = ḋ/(√2·L) (ḋ the corner's speed, L the arm)."""
-        if self.start_kind() != "affine":
-            return "# the fabric starts at rest: the frame's speed ramps up smoothly"
         g = self.frame(model)
         p0 = fmt(self.loading(model).speed_m_s / (math.sqrt(2) * g.frame_length_m))
-        field = AffineField(origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xy=p0, yx=p0,
-                            tools="frame")
-        return affine_start("free", field)
+        return AffineField(origin_m=(float(g.pin_a[0]), float(g.pin_a[1])), xy=p0, yx=p0,
+                           tools="frame")
 
     def corner_travel(self, model: BeadModel) -> str:
         """LAMMPS formula of the pulled corner's travel d [m], read back from the clamps'

@@ -33,7 +33,6 @@ from ..scene.adaptive import (
 from ..scene.drag import AffineField
 from ..scene.energy import ContactPower
 from ..scene.plan import RunPlan
-from ..scene.start import affine_start
 from ..scene.templates import fmt, render
 from .driven import DrivenResult, rigid_clamp_power
 from .driven_outputs import energy_columns, read_outputs
@@ -137,7 +136,8 @@ class Tension(EndClampedTest):
         ref_force *= 1e-3 * self.max_elongation_pct
         power, power_ref = rigid_clamp_power()
         # the clamps' inner edges at x_left - u and x_right + u move at -v and +v: the
-        # fabric between them stretches affinely along x
+        # fabric between them stretches affinely along x (the drag's field, and the start's
+        # with start = "affine": v = 2·v0·(x − x0)/(x_right − x_left))
         field = AffineField(origin_m=(0.5 * (left + right), 0.0),
                             xx=f"2*v_v/({fmt(right - left)}+2*v_u)", tools="clamps")
         damping, damping_power = self.drag_block(model, field)
@@ -165,13 +165,6 @@ class Tension(EndClampedTest):
                       right_displacement=moves[0], left_displacement=moves[1],
                       damping=damping, start=self.start_block(field), outputs=outputs)
         return self.scene_text(model, dt, text, extra, header=header)
-
-    def start_block(self, field: AffineField) -> str:
-        """The coupon's start (``start``): at rest, or with the clamps' uniform stretch
-        field at the start, v = 2·v0·(x − x0)/(x_right − x_left)."""
-        if self.start_kind() != "affine":
-            return "# the fabric starts at rest: the clamps' speed ramps up smoothly"
-        return affine_start("free", field)
 
     def clamp_travel(self, model: BeadModel) -> str:
         """LAMMPS formula of the clamps' mean travel [m] from their centres of mass (each
