@@ -323,6 +323,7 @@ def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None
     if crimp_result is not None:
         summary["crimped"] = crimp_result.summary.get("crimped")
         summary["crimp_stop"] = crimp_result.summary.get("stop")
+        summary["within_family_law"] = crimp_result.summary.get("within_family_law")
     if coupon_result is not None:
         summary["coupon"] = coupon_result.summary.get("relaxed_state")
         summary["coupon_stop"] = coupon_result.summary.get("stop")

@@ -228,6 +228,15 @@ def test_demo_fast_runs_end_to_end(tmp_path):
     assert "periodic shear (the fabric without clamps" in out.stdout
     summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
     assert summary["periodic_shear"]["normalised_force_at_angle_n_m"]
+    # the crimp says where the law's fibres touch in the fabric it crimped (the preset's)
+    from fabmd.examples_dir import example_scene
+    from fabmd.presets import apply_preset
+
+    scene = apply_preset(load_scene(example_scene("plain_weave.toml")), "fast")
+    law = summary["crimp"]["within_family_law"]
+    assert law == scene.contact.law_realisation(("warp", "weft"))
+    assert law["warp"]["touching_vf"] > 0 and "within-family law: warp, weft fibres touch at" \
+        in out.stdout
     for name in ("demo.png", "summary.json", "loose/preview.png", "crimp/sections.png",
                  "tension/tension/curve.png", "picture_frame/picture_frame/curve.png",
                  "periodic_shear/periodic_shear/curve.png"):

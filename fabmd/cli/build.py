@@ -108,18 +108,9 @@ def summarise(model, scene) -> dict:
         "crimp": info["crimp"],
         "datasheet": info.get("datasheet"),
         "yarn_packing": info.get("yarn_packing"),
-        "within_family_law": law_realisation(scene.contact, fams),
+        "within_family_law": scene.contact.law_realisation(fams),
         "critical_time_step_s": dt,
     }
-
-
-def law_realisation(contact, families) -> dict | None:
-    """Per family, where the within-family law's virtual fibres touch and the pressure the
-    law loses below that state (:meth:`~fabmd.model.bundle_contact.BundleContact.
-    realisation`); None without the law."""
-    if contact.within_family_law is None:
-        return None
-    return {f: contact.family_law(f).realisation() for f in families}
 
 
 def law_line(s: dict) -> str:

@@ -39,6 +39,7 @@ def run(args) -> int:
     from ..results.folder import prepare_run_folder, write_json
     from ..results.preview import preview_png
     from ..scenefile import load_scene
+    from .build import law_line
 
     t0 = time.perf_counter()
     scene = apply_preset(load_scene(args.scene or example_scene("plain_weave.toml")),
@@ -66,7 +67,8 @@ def run(args) -> int:
         f"thickness {1e3 * c['loose']['thickness_m']:.2f} -> "
         f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp (per fibre) "
         + ", ".join(f"{f} {v:.2f} %" for f, v in c["crimped"]["crimp_pct"].items())
-        + f"{heights}; {c.get('stop', '')}{_released(c)} -> crimp/sections.png")
+        + f"{heights}; {c.get('stop', '')}{_released(c)} -> crimp/sections.png"
+        + law_line(c))
     tension = run_test(scene, "tension", out / "tension", engine=engine,
                        crimped=out / "crimp")
     t = tension["test_summary"]

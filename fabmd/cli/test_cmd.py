@@ -45,6 +45,7 @@ def run(args) -> int:
 def summary_text(name: str, source: str, summary: dict) -> str:
     """The terminal summary of a pipeline run: bead count of the model that ran, per-stage
     verdicts (crimp stop, quasi-static, energy balance), then every scalar with its unit."""
+    from .build import law_line
     from .report import energy_line, quasi_static_line, value_text
 
     s = summary["test_summary"]
@@ -55,6 +56,8 @@ def summary_text(name: str, source: str, summary: dict) -> str:
     for stage in ("crimp", "coupon"):
         if summary.get(f"{stage}_stop"):
             lines.append(f"  {stage}: {summary[f'{stage}_stop']}")
+    if law := law_line(summary).strip("\n"):  # the law of the fabric that was crimped
+        lines.append(law)
     stage = [text for text in (quasi_static_line(s.get("quasi_static")),
                                energy_line(s.get("energy_balance"))) if text]
     lines += [f"  {name}: {text}" for text in stage]

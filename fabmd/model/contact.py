@@ -393,6 +393,14 @@ class ContactModel:
         """The within-family law's bundle of ``family`` (its own fibre where given)."""
         return dict(self.within_family_laws).get(family, self.within_family_law)
 
+    def law_realisation(self, families) -> dict | None:
+        """Per family, where the within-family law's virtual fibres touch and the pressure
+        the law loses below that state (:meth:`~fabmd.model.bundle_contact.BundleContact.
+        realisation`); None without the law."""
+        if self.within_family_law is None:
+            return None
+        return {f: self.family_law(f).realisation() for f in families}
+
     def crossing_law(self, beads: list[BeadParameters]) -> CrossingLaw:
         """The crossings' law (``crossing = "law"``; the within-family law's bundle)."""
         if self.crossing != "law":

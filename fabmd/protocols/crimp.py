@@ -567,6 +567,8 @@ def reduce(run_dir: Path, loose: BeadModel, crimp: Crimp,
         "loose": fabric_measures(loose),
         "crimped": fabric_measures(crimped),
         "overlap": overlap_summary(run_dir, crimp.contact),
+        # where the law's fibres touch in this model: its first kPa are cut off above Vf0
+        "within_family_law": crimp.contact.law_realisation(loose.family_names),
         # no yarn may pass through another on the way to the woven state
         "pass_through": passed_through(loose, crimped),
         "areal_density_kg_m2": areal_density_kg_m2(crimped),
