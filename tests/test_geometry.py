@@ -145,6 +145,30 @@ def test_area_packing_tiles_the_section_and_spans_it(n):
         YarnSpec(1870, GLASS, width_m=4.2e-3, n_fibres=n, fibre_packing="dense")
 
 
+def test_the_clearance_is_the_gap_between_the_fibres_of_crossing_yarns():
+    """An ``"area"`` packing pokes out of a thin section (7 fibres in 1.6 x 0.576 mm stand
+    0.645 mm high); crossing yarns are stacked by the height their fibres fill, so the
+    loose fabric keeps the clearance between fibres (by the sections alone its crossings
+    overlapped by 0.088 mm). Inscribed fibres stay inside: their heights are the sections'."""
+    def spec(packing):
+        return YarnSpec("600 tex", GLASS, width_m="1.6 mm", height_m="0.576 mm",
+                        spacing_m="2.5 mm", n_fibres=7, fibre_packing=packing)
+
+    inscribed, area = spec("inscribed"), spec("area")
+    assert inscribed.occupied_height_m == inscribed.height_m
+    assert inscribed.occupied_width_m == inscribed.width_m
+    offsets, d = area.packing()
+    assert area.occupied_height_m == pytest.approx(np.ptp(offsets[:, 1]) + d)
+    assert area.occupied_height_m > 1.1 * area.height_m
+    assert area.occupied_width_m > area.width_m
+    clearance = 0.05e-3
+    fabric = Fabric(Weave.plain(), area, area, clearance_m=clearance, plateau=0.7)
+    half = fabric.levels()["crossing_half_separation"][0]
+    assert half == pytest.approx(0.5 * area.occupied_height_m + 0.5 * clearance)
+    model = render_fabric(fabric)  # raises on overlapping beads
+    assert model.info["clearance_m"] > 0.0  # closest where the crossing yarn bends down
+
+
 def test_impossible_fabrics_are_one_line_errors():
     with pytest.raises(InputError, match="does not fit the warp spacing"):
         Fabric(Weave.plain(), yarn(width="3 mm"), yarn())

@@ -85,7 +85,9 @@ def test_a_fibre_whose_beads_coincide_is_a_fold_not_a_nan():
                           'shape = "lenticular"': 'shape = "ellipse"'})
     fabric = _fabric(text)
     with pytest.raises(InputError, match="weft-2: its fibre .* would fold"):
-        render_loose(dataclasses.replace(fabric, lift_m=1.646e-3))
+        # (the crossings stacked by what the area packing's fibres fill: the weft's offset
+        # curve has a cusp at lifts 1.3-1.5 mm, before its curvature says fold at 1.6)
+        render_loose(dataclasses.replace(fabric, lift_m=1.4e-3))
 
 
 def test_the_two_families_fibres_differ_in_diameter():

@@ -7,7 +7,10 @@ thickness, the fabric's mid-plane is z = 0 and the unit cell starts at x = y = 0
   warp *i* lies at y = (i + ½)·warp spacing, weft *j* at x = (j + ½)·weft
   spacing; unit cell ``n_weft·s_weft × n_warp·s_warp``. At every crossing the
   two yarns' centrelines are (h_warp + h_weft)/2 + clearance apart, each
-  displaced half of that from the mid-plane (both families crimp).
+  displaced half of that from the mid-plane (both families crimp). A height here is
+  the one the yarn's virtual fibres fill (``YarnSpec.occupied_height_m``: the
+  section's, or more where ``fibre_packing = "area"`` pokes out of a thin section),
+  so the clearance is the gap between the crossing yarns' fibres.
 * 3D (:class:`~fabmd.geometry.architecture3d.Architecture3D`): straight weft
   layers and stuffer warps, binders weaving between the gaps; unit cell
   ``columns·s_weft × dents·s_warp``. Neighbouring weft layers and gap levels
@@ -55,7 +58,7 @@ class Fabric:
         binder: binder yarns (3D only; their spacing is the warp spacing).
         tiling: unit cells along x (warp direction) and y.
         periodic: periodic in x and y (every yarn continuous across the boundary).
-        clearance_m: gap left between crossing yarn sections [m]; default 10 %
+        clearance_m: gap left between crossing yarns' fibres [m]; default 10 %
             of the smallest yarn height.
         plateau: fraction of a crossed yarn's half-width over which a crimped
             yarn stays level, in [0, 1) (0: pure cosine waves).
@@ -402,7 +405,7 @@ class Fabric:
         """3D: z of every weft layer (``"weft"``) and gap (``"gap"``) [m]; 2D: crossing offsets."""
         c = self.clearance_m + self.lift_m  # the lift dilates the loose state in z
         if not self.is_3d:
-            half = 0.25 * (self.warp.height_m + self.weft.height_m) + 0.5 * c
+            half = 0.25 * (self.warp.occupied_height_m + self.weft.occupied_height_m) + 0.5 * c
             return {"crossing_half_separation": [half]}
         return layered_levels(self, c)
 

@@ -32,7 +32,8 @@ Two packing rules (:data:`PACKINGS`, ``[yarns.*] fibre_packing``):
   d = sqrt(area/(N·√3/2)), and of the lattice selections above the one whose second
   moments (of the fibre discs, across and through the thickness) best match the section's
   is kept. The fibres then span the section (19 fibres in a 4.2 × 0.638 mm ellipse: 4.29 ×
-  0.67 mm, against 2.93 × 0.55 mm inscribed) and poke out a little at thin ends; touching
+  0.67 mm, against 2.93 × 0.55 mm inscribed) and poke out a little at thin ends (the loose
+  build stacks yarns by what their fibres fill, ``YarnSpec.occupied_height_m``); touching
   virtual fibres are at the yarn's own fibre volume fraction whatever N is (with the
   within-family law, :mod:`fabmd.model.bundle_contact`, the law then starts at the same
   state for every fibre count; inscribed, it starts at Vf 0.58 for 7 and 0.90 for 19

@@ -23,18 +23,18 @@ def layered_levels(fabric: Fabric, c: float) -> dict[str, list[float]]:
     a = fabric.architecture
     binder_gaps = a.binder_gaps()
     table = fabric.yarn_spec_table()
-    binder_h = max(s.height_m for s in fabric._family_specs("binder"))
+    binder_h = max(s.occupied_height_m for s in fabric._family_specs("binder"))
     heights = []
     for g in range(a.n_gaps):
         h = 0.0
         if g in a.warp_gaps:  # the tallest stuffer of the gap, over the dents
-            h = max(h, max(table[fabric._spec_key("warp", d, g)].height_m
+            h = max(h, max(table[fabric._spec_key("warp", d, g)].occupied_height_m
                            for d in range(1, a.dents + 1)))
         if g in binder_gaps:
             h = max(h, binder_h)
         heights.append(h)
     # each weft layer as high as its tallest weft
-    hfs = [max(table[fabric._spec_key("weft", col, k)].height_m
+    hfs = [max(table[fabric._spec_key("weft", col, k)].occupied_height_m
                for col in range(1, a.columns + 1)) for k in range(1, a.weft_layers + 1)]
     gap_z = [0.0]
     weft_z = []
@@ -57,12 +57,12 @@ def woven_cell(fabric: Fabric) -> tuple[list[YarnPath], list[str]]:
     c = fabric.clearance_m + fabric.lift_m
     warp_keys = [fabric._spec_key("warp", i + 1, None) for i in range(m.shape[0])]
     weft_keys = [fabric._spec_key("weft", j + 1, None) for j in range(m.shape[1])]
-    hw = np.array([table[k].height_m for k in warp_keys])
-    hf = np.array([table[k].height_m for k in weft_keys])
-    # each crossing as far apart as its two yarns need
+    hw = np.array([table[k].occupied_height_m for k in warp_keys])
+    hf = np.array([table[k].occupied_height_m for k in weft_keys])
+    # each crossing as far apart as its two yarns' fibres need
     half = 0.25 * (hw[:, None] + hf[None, :]) + 0.5 * c
-    ww = np.array([table[k].width_m for k in warp_keys])
-    wf = np.array([table[k].width_m for k in weft_keys])
+    ww = np.array([table[k].occupied_width_m for k in warp_keys])
+    wf = np.array([table[k].occupied_width_m for k in weft_keys])
     sx, sy = fabric.weft.spacing_m, fabric.warp.spacing_m
     weft_u = (np.arange(m.shape[1]) + 0.5) * sx
     warp_u = (np.arange(m.shape[0]) + 0.5) * sy
@@ -107,6 +107,6 @@ def layered_cell(fabric: Fabric) -> tuple[list[YarnPath], list[str]]:
             out.append(YarnPath(f"binder-d{d + 1}-{b + 1}", "binder", 0,
                                 y, lx, lx, tuple(cols),
                                 tuple(lev["gap"][g] for g in path),
-                                (f * 0.5 * fabric.weft.width_m,), level=min(path)))
+                                (f * 0.5 * fabric.weft.occupied_width_m,), level=min(path)))
             keys.append(fabric._spec_key("binder", d + 1, None))
     return out, keys

@@ -172,3 +172,19 @@ class YarnSpec:
     def packing(self) -> tuple[np.ndarray, float]:
         """Fibre offsets (n, 2) [m] and contact diameter [m] (see :mod:`.section`)."""
         return self.section.packing(self.n_fibres, self.fibre_packing)
+
+    @property
+    def occupied_height_m(self) -> float:
+        """Height the virtual fibres fill through the thickness [m]: the section's height,
+        or more where the packing's fibres poke out of it (``"area"`` tiles the section's
+        area, so its outer fibres can stand past a thin section's outline). The loose build
+        stacks crossing yarns by this height, so the clearance is the gap between fibres."""
+        offsets, d = self.packing()
+        return max(self.height_m, float(np.ptp(offsets[:, 1])) + d)
+
+    @property
+    def occupied_width_m(self) -> float:
+        """Width the virtual fibres fill across the yarn [m] (as :attr:`occupied_height_m`);
+        a crossing yarn keeps its level over it."""
+        offsets, d = self.packing()
+        return max(self.width_m, float(np.ptp(offsets[:, 0])) + d)
