@@ -324,6 +324,11 @@ def _run_stages(scene: Scene, test: str, out: Path, engine: Engine | None = None
         summary["crimped"] = crimp_result.summary.get("crimped")
         summary["crimp_stop"] = crimp_result.summary.get("stop")
         summary["within_family_law"] = crimp_result.summary.get("within_family_law")
+    elif (crimp_summary := Path(crimp_dir) / "summary.json").exists():
+        # a crimp run earlier (--crimped, or a resumed run): its law, as that run wrote it
+        law = json.loads(crimp_summary.read_text()).get("within_family_law")
+        if law is not None:
+            summary["within_family_law"] = law
     if coupon_result is not None:
         summary["coupon"] = coupon_result.summary.get("relaxed_state")
         summary["coupon_stop"] = coupon_result.summary.get("stop")

@@ -83,6 +83,24 @@ def test_cli_crimp_test_and_measure(tiny_scene, tmp_path):
     assert again.returncode == 2 and "--overwrite" in again.stderr
 
 
+def test_a_test_of_an_earlier_crimp_reports_that_crimps_law(tmp_path):
+    """``fabmd test --crimped DIR`` carries the crimp folder's ``within_family_law`` (where
+    the law's fibres touch, the kPa cut off) into its own summary and terminal lines."""
+    scene = tmp_path / "tiny_law.toml"
+    scene.write_text(TINY.replace(
+        "[crimp]", '[contact]\nwithin_family = { law = "glass", form = "law" }\n[crimp]'))
+    out = run_cli("crimp", str(scene), "--out", str(tmp_path / "c"), "--form", "cell",
+                  "--json")
+    assert out.returncode == 0, out.stderr
+    law = json.loads(out.stdout)["within_family_law"]
+    assert set(law) == {"warp", "weft"}
+    out = run_cli("test", "tension", str(scene), "--out", str(tmp_path / "t"),
+                  "--crimped", str(tmp_path / "c"))
+    assert out.returncode == 0, out.stderr
+    assert json.loads((tmp_path / "t" / "summary.json").read_text())["within_family_law"] == law
+    assert "within-family law: warp, weft fibres touch at Vf" in out.stdout
+
+
 def test_resume_of_a_finished_pipeline_keeps_stages(tiny_scene, tmp_path):
     import tomllib
 
