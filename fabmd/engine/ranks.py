@@ -2,9 +2,11 @@
 
 Splitting a model over ranks pays only when each rank keeps enough beads that its
 share of the pair and bond work outweighs the exchange of ghost beads every step.
-``MIN_BEADS_PER_RANK`` is that break-even, measured on the 2-core development machine
-(``benchmarks/ranks.py``, ``benchmarks/RESULTS.md`` "Ranks"): below it a second rank
-costs more in communication than it saves.
+``MIN_BEADS_PER_RANK`` is set above that break-even, measured on the idle 2-core
+development machine (``benchmarks/RESULTS.md`` "Ranks on an idle machine"): LAMMPS's loop
+on 2 ranks ran 0.84x as fast as on one at 128 beads per rank and 1.24x at 256, and fabmd's
+own runs ran 1.5-1.6x faster from 532 beads per rank (the example's periodic cell, 1,064
+beads) up. More than two ranks have not been measured here.
 
 The choice, in order of precedence: ``--np N`` (``requested``), the environment
 variable ``FABMD_NP`` (CI and the test suite set ``FABMD_NP=1`` so that parallel test
@@ -30,7 +32,7 @@ from ..errors import InputError
 #: environment variable that sets the ranks when ``--np`` is not given
 ENV_VARIABLE = "FABMD_NP"
 #: fewest beads per rank for which another rank pays (see the module docstring)
-MIN_BEADS_PER_RANK = 4000
+MIN_BEADS_PER_RANK = 500
 #: how long :func:`busy_cores` watches the machine, s (long enough for 40 jiffies at
 #: 100 Hz on two cores, short enough not to be noticed at start-up)
 SAMPLE_WINDOW_S = 0.4
