@@ -246,6 +246,9 @@ def test_demo_fast_runs_end_to_end(tmp_path):
     assert "periodic shear (the fabric without clamps" in out.stdout
     summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
     assert summary["periodic_shear"]["normalised_force_at_angle_n_m"]
+    # the tension says whether its initial stiffness comes from a quasi-static toe
+    trusted = summary["tension"]["initial_stiffness_trusted"]
+    assert ("toe not quasi-static: an upper bound" in out.stdout) is (not trusted)
     # the crimp says where the law's fibres touch in the fabric it crimped (the preset's)
     from fabmd.examples_dir import example_scene
     from fabmd.presets import apply_preset

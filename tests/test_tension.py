@@ -224,3 +224,22 @@ def test_fibres_started_with_the_clamps_stretch_from_the_first_step(tmp_path):
     first = [r.summary["quasi_static_intervals"]["intervals"][0]["inertia_share"]
              for r in runs.values()]
     assert first[1] < 0.2 * first[0], first
+
+
+def test_an_initial_stiffness_fitted_over_a_flagged_toe_is_marked():
+    """The initial stiffness is the toe's slope; where the verdict flags part of the toe,
+    its force is drag (the example's released toe falls 5-7x per halving of the speed), so
+    the summary says it is not the fabric's, and names the flagged part."""
+    import types
+
+    test = Tension()
+    flagged = types.SimpleNamespace(summary={
+        "transition_elongation_pct": 1.58, "quasi_static": {"flagged": [[0.0, 1.75]]}})
+    test.after_verdict(flagged)
+    assert flagged.summary["initial_stiffness_trusted"] is False
+    assert "0-1.58 %" in flagged.summary["initial_stiffness_note"]
+    past_toe = types.SimpleNamespace(summary={
+        "transition_elongation_pct": 1.58, "quasi_static": {"flagged": [[4.0, 4.5]]}})
+    test.after_verdict(past_toe)
+    assert past_toe.summary["initial_stiffness_trusted"] is True
+    assert "initial_stiffness_note" not in past_toe.summary

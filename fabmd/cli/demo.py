@@ -72,8 +72,10 @@ def run(args) -> int:
     tension = run_test(scene, "tension", out / "tension", engine=engine,
                        crimped=out / "crimp")
     t = tension["test_summary"]
+    toe = "" if t.get("initial_stiffness_trusted", True) else \
+        " (toe not quasi-static: an upper bound)"
     say(f"3. tension ({tension['coupon_beads']} beads, {t['wall_s']:.0f} s): initial stiffness "
-        f"{t['initial_stiffness_n_m_per_width']:.4g} N/m per unit strain, after "
+        f"{t['initial_stiffness_n_m_per_width']:.4g} N/m per unit strain{toe}, after "
         f"{t['transition_elongation_pct']:.3g} % {t['final_stiffness_n_m_per_width']:.4g} N/m "
         f"per unit strain; "
         f"{_balance(t)} -> tension/tension/curve.png")

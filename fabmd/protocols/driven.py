@@ -316,6 +316,9 @@ class DrivenTest:
         written before plans were kept."""
         return read_plan(run_dir) or self.plan(model)
 
+    def after_verdict(self, result: DrivenResult) -> None:
+        """Mark what the summary reports from flagged intervals (default: nothing)."""
+
     def drag_block(self, model: BeadModel, field: AffineField) -> tuple[str, str]:
         """(LAMMPS text, per-bead damping power) of the drag on the free beads: relative to
         the tools' affine velocity ``field`` (``drag = "affine"``) or on the absolute
@@ -454,6 +457,7 @@ class DrivenTest:
                 result.summary["start_settled"] = relaxation_settled(run_dir / "log.lammps")
             judge(result, self.protocol, run_dir, self.quasi_static_limits,
                   self.interval_axis, self.rate_curve[1])
+            self.after_verdict(result)
         if check_rate:
             slow = dataclasses.replace(self, speed_fraction=self.speed_fraction / 2)
             other = slow.run(model, out=Path(run_dir) / "half_speed", engine=engine)
