@@ -243,3 +243,10 @@ def test_an_initial_stiffness_fitted_over_a_flagged_toe_is_marked():
     test.after_verdict(past_toe)
     assert past_toe.summary["initial_stiffness_trusted"] is True
     assert "initial_stiffness_note" not in past_toe.summary
+    # the periodic tension fits over 10-40 % of its range: 0.2-0.8 % of a 2 % test
+    from fabmd.protocols.periodic import PeriodicTension
+
+    cell = types.SimpleNamespace(summary={"quasi_static": {"flagged": [[0.0, 0.25]]}})
+    PeriodicTension(max_strain_pct=2.0).after_verdict(cell)
+    assert cell.summary["initial_stiffness_trusted"] is False
+    assert "over 0.2-0.25 %" in cell.summary["initial_stiffness_note"]

@@ -44,6 +44,7 @@ from ..scene.templates import fmt, render, render_inline
 from .driven import DrivenResult, RelaxedDrivenTest
 from .driven_outputs import energy_columns, read_outputs
 from .picture_frame import interval_force
+from .verdict import mark_fitted_stiffness
 
 TRANSVERSE = ("held", "free")
 
@@ -194,6 +195,12 @@ class PeriodicTension(_PeriodicCellTest):
         settle = math.ceil(10 * pdamp / self.time_step_s(model))
         return render_inline("periodic_transverse_free", pdamp=pdamp, modulus=modulus,
                              settle_steps=settle)
+
+    def after_verdict(self, result: DrivenResult) -> None:
+        """The initial stiffness is the slope over 10-40 % of the strain range: marked where
+        the verdict flags part of that range (as the tension's toe)."""
+        mark_fitted_stiffness(result.summary, 0.1 * self.max_strain_pct,
+                              0.4 * self.max_strain_pct, "%")
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:

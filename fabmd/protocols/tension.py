@@ -37,6 +37,7 @@ from ..scene.templates import fmt, render
 from .driven import DrivenResult, rigid_clamp_power
 from .driven_outputs import energy_columns, read_outputs
 from .end_clamps import EndClampedTest
+from .verdict import mark_fitted_stiffness
 
 PROTOCOL = "tension"
 
@@ -186,23 +187,12 @@ class Tension(EndClampedTest):
                               ref_force * plan.speed_m_s)
 
     def after_verdict(self, result: DrivenResult) -> None:
-        """The initial stiffness is fitted over the toe; where the verdict flags part of the
-        toe its force there is drag and inertia, not the fabric's (the example's released
-        toe at 0.5-0.75 %: 2.64 / 0.53 / 0.08 N at 2e-4 / 1e-4 / 5e-5, benchmarks/RESULTS.md
-        "The tension toe is drag"): ``initial_stiffness_trusted`` false and a note."""
-        summary = result.summary
-        toe_end = summary.get("transition_elongation_pct")
-        flagged = (summary.get("quasi_static") or {}).get("flagged") or []
-        if toe_end is None or not np.isfinite(toe_end):
-            return
-        overlap = [(a, min(b, toe_end)) for a, b in flagged if a < toe_end]
-        summary["initial_stiffness_trusted"] = not overlap
-        if overlap:
-            where = ", ".join(f"{a:g}-{b:.3g} %" for a, b in overlap)
-            summary["initial_stiffness_note"] = (
-                f"not the fabric's: the toe it is fitted over (0-{toe_end:.3g} %) is not "
-                f"quasi-static over {where} (drag and inertia in the force; it falls with "
-                f"the speed); an upper bound: lower speed_fraction to measure it")
+        """The initial stiffness is fitted over the toe (0 to the bilinear transition); where
+        the verdict flags part of it, the toe's force is drag and inertia, not the fabric's
+        (the example's released toe at 0.5-0.75 %: 2.64 / 0.53 / 0.08 N at 2e-4 / 1e-4 /
+        5e-5, benchmarks/RESULTS.md "The tension toe is drag")."""
+        mark_fitted_stiffness(result.summary, 0.0,
+                              result.summary.get("transition_elongation_pct"), "%")
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> TensionResult:

@@ -99,6 +99,24 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
             "trusted": trusted, "partly": bool(whole_run_ok and flagged and trusted)}
 
 
+def mark_fitted_stiffness(summary: dict, low: float, high: float | None, unit: str) -> None:
+    """Say whether ``initial_stiffness`` (fitted over ``low``-``high`` of the curve's
+    interval axis, in ``unit``) comes from quasi-static intervals: where the verdict flags
+    part of that range, ``initial_stiffness_trusted`` is false and
+    ``initial_stiffness_note`` names the part (an upper bound: its force holds drag)."""
+    flagged = (summary.get("quasi_static") or {}).get("flagged") or []
+    if high is None or not np.isfinite(high):
+        return
+    overlap = [(max(a, low), min(b, high)) for a, b in flagged if a < high and b > low]
+    summary["initial_stiffness_trusted"] = not overlap
+    if overlap:
+        where = ", ".join(f"{a:.3g}-{b:.3g} {unit}" for a, b in overlap)
+        summary["initial_stiffness_note"] = (
+            f"not the fabric's: the range it is fitted over ({low:.3g}-{high:.3g} {unit}) is "
+            f"not quasi-static over {where} (drag and inertia in the force; it falls with "
+            f"the speed); an upper bound: lower speed_fraction to measure it")
+
+
 def start_spike_ratio(force, fraction: float = 0.05) -> float | None:
     """Largest |force| in the first ``fraction`` of the samples (the first excluded: it is
     printed before any force) over the largest after them; above 1 the force jumps when
