@@ -179,12 +179,15 @@ class YarnSpec:
         or more where the packing's fibres poke out of it (``"area"`` tiles the section's
         area, so its outer fibres can stand past a thin section's outline). The loose build
         stacks crossing yarns by this height, so the clearance is the gap between fibres."""
-        offsets, d = self.packing()
-        return max(self.height_m, float(np.ptp(offsets[:, 1])) + d)
+        return max(self.height_m, self._fibre_extent_m(1))
 
     @property
     def occupied_width_m(self) -> float:
         """Width the virtual fibres fill across the yarn [m] (as :attr:`occupied_height_m`);
         a crossing yarn keeps its level over it."""
+        return max(self.width_m, self._fibre_extent_m(0))
+
+    def _fibre_extent_m(self, axis: int) -> float:
+        """Outer extent of the packed fibres across (0) or through (1) the yarn [m]."""
         offsets, d = self.packing()
-        return max(self.width_m, float(np.ptp(offsets[:, 0])) + d)
+        return float(np.ptp(offsets[:, axis])) + d
