@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 from .engine import Engine, mpi
 from .errors import CalibrationNotReached, InputError
@@ -25,6 +26,7 @@ from .protocols.calibrate_knobs import (
     LOOSE_HEIGHT_RANGE,
     check_targets,
     default_thickness_families,
+    height_start,
 )
 from .results.folder import write_json
 from .scenefile import Scene
@@ -75,7 +77,7 @@ def drawable(scene: Scene, heights_m: dict[str, float]) -> bool:
 
 #: the crimp stage's file naming the loose heights and expansion its crimp was reached with
 PINNED = "pinned_crimp.json"
-_PIN_KEYS = ("target_crimp_pct", "crimp_by", "crimp_tolerance_pct")
+_PIN_KEYS = ("target_crimp_pct", "crimp_by", "crimp_tolerance_pct", "loose_height_start_m")
 
 
 def pin_crimp(scene: Scene, out: Path, engine: Engine | None = None,
@@ -103,14 +105,16 @@ def pin_crimp(scene: Scene, out: Path, engine: Engine | None = None,
         return scene, {}
     where = scene.source or "scene"
     plain = without_crimp_targets(scene)
+    tall, tall_range = loose_heights(plain, crimp.target_crimp_pct, where)
     targets = CrimpTargets(crimp_pct=dict(crimp.target_crimp_pct), crimp_by="loose_height",
                            crimp_tolerance_pct=crimp.crimp_tolerance_pct,
                            target_tension=crimp.target_tension, datasheet=False,
                            tied_heights=alike_families(scene, crimp.target_crimp_pct,
-                                                       crimp.target_tension))
+                                                       crimp.target_tension),
+                           loose_height_start=start_strains(plain, crimp, tall, tall_range,
+                                                            where))
     base = crimp_stage(plain)
     base = dataclasses.replace(base, target_tension=None)
-    tall, tall_range = loose_heights(plain, targets.crimp_pct, where)
     cell = periodic_cell(plain)
     check_targets(cell, targets, base, default_thickness_families(cell), None)
     engine = engine or Engine()
@@ -119,9 +123,11 @@ def pin_crimp(scene: Scene, out: Path, engine: Engine | None = None,
             print(line, file=sys.stderr, flush=True)
     if say is not None:
         state = (" once released off the loom, woven" if crimp.release_tension else "")
-        say(f"loose height: searching the loose sections of {', '.join(targets.crimp_pct)} "
-            f"for crimp {_targets_text(crimp.target_crimp_pct)}{state} at the weaving tension "
-            f"(a crimp run each, at most {targets.max_runs})")
+        start = crimp.start_heights_m()
+        start = f" from {_heights_text(start)}" if start else ""
+        say(f"loose height: searching the loose sections of {', '.join(targets.crimp_pct)}"
+            f"{start} for crimp {_targets_text(crimp.target_crimp_pct)}{state} at the "
+            f"weaving tension (a crimp run each, at most {targets.max_runs})")
     result = calibrate(cell, targets, base=base, out=out,
                        engine=dataclasses.replace(engine, progress=False), overwrite=True,
                        on_run=None if say is None else lambda r: say(_run_line(r)),
@@ -141,6 +147,62 @@ def pin_crimp(scene: Scene, out: Path, engine: Engine | None = None,
     if mpi.is_root():
         write_json(Path(out) / PINNED, found)
     return pinned_scene(scene, found), found
+
+
+def start_strains(scene: Scene, crimp, tall: dict, ranges: dict | None, where: str) -> dict:
+    """``[crimp] loose_height_start_m`` as the relative change of each family's loose
+    height h = h0·(1 + s) (``tall``: h0 per family), checked before LAMMPS: within
+    ``ranges``, the range the section can be drawn at (:func:`loose_heights`; None:
+    :data:`LOOSE_HEIGHT_RANGE`), the cell drawable there.
+
+    Raises:
+        InputError: a start outside that range, or one the cell cannot be drawn at.
+    """
+    start_m = crimp.start_heights_m()
+    strains = {}
+    for fam, h in start_m.items():
+        if fam not in tall:  # a family the fabric does not have: refused with the targets
+            continue
+        h0 = tall[fam]
+        s = h / h0 - 1
+        lo, hi = LOOSE_HEIGHT_RANGE if ranges is None else ranges[fam]
+        if not lo - 1e-9 <= s <= hi + 1e-9:
+            raise InputError(f"{where}: crimp.loose_height_start_m.{fam} = {1e3 * h:.6g} mm "
+                             f"is outside the heights the search may draw the {fam} yarns "
+                             f"at, {1e3 * h0 * (1 + lo):.6g} … {1e3 * h0 * (1 + hi):.6g} mm "
+                             f"(the yarns' height_m {1e3 * h0:.6g} mm × {1 + lo:g} … "
+                             f"{1 + hi:g})")
+        strains[fam] = s
+    if strains and not drawable(scene, {f: tall[f] * (1 + s) for f, s in strains.items()}):
+        raise InputError(f"{where}: the cell cannot be drawn with crimp.loose_height_start_m "
+                         f"({_heights_text(start_m)})")
+    return strains
+
+
+def check_start(scene: Scene) -> None:
+    """``[crimp] loose_height_start_m`` of ``scene`` checked against the fabric before any
+    folder is made (:func:`fabmd.preflight.check_scene`): a height the search may draw,
+    one height for families drawn alike (nothing where the scene gives no start).
+
+    Raises:
+        InputError: as :func:`start_strains`, or a tied group given two heights.
+    """
+    crimp = crimp_stage(scene)
+    if not crimp.pins_crimp or not crimp.start_heights_m():
+        return
+    where = scene.source or "scene"
+    plain = without_crimp_targets(scene)
+    specs = plain.fabric.specs()
+    tall = {fam: float(specs[fam].height_m) for fam in crimp.start_heights_m() if fam in specs}
+    # the range only (the grid of drawable heights is the search's, 40 drawings)
+    targets = SimpleNamespace(loose_height_start=start_strains(plain, crimp, tall, None,
+                                                               where))
+    for group in alike_families(scene, crimp.target_crimp_pct, crimp.target_tension):
+        height_start(targets, group)
+
+
+def _heights_text(heights_m: dict) -> str:
+    return ", ".join(f"{fam} {1e3 * h:.6g} mm" for fam, h in heights_m.items())
 
 
 def alike_families(scene: Scene, crimp_pct: dict, tension) -> tuple[tuple[str, ...], ...]:

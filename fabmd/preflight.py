@@ -89,6 +89,9 @@ def check_scene(scene) -> None:
         crimp_stage(scene)
     except InputError as exc:
         raise _in_scene(scene, exc) from None
+    from .loose_height import check_start
+
+    check_start(scene)  # where a loose-height search starts: a height it may draw
     if "calibrate" in scene.protocols:  # fabmd calibrate's targets
         from .protocols.calibrate import targets_from_scene
 

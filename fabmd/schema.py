@@ -105,7 +105,7 @@ UNITS: dict[str, dict[str, str | Unit]] = {
               "shear_cell_m": "length", "report_depths_m": "length"},
     "Compaction": {"max_pressure_pa": "pressure", "datasheet_pressure_pa": "pressure"},
     "AdaptiveLoading": {"floor_force_n": "force"},
-    "Crimp": {"settle_force_n": "force"},
+    "Crimp": {"settle_force_n": "force", "loose_height_start_m": "length"},
 }
 #: fields whose name carries a unit that text cannot give: numbers only (a gain in m/s/N;
 #: a dict of widths [m] by family that the build sets, no scene key)

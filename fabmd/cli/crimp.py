@@ -79,7 +79,7 @@ def _targets_text(s: dict) -> str:
         return "".join(
             f"  {f}: loose section {1e3 * h:.4g} mm high for the target crimp "
             f"{pin['target_crimp_pct'][f]:.2f} % at the weaving tension "
-            f"({pin['runs']} crimp runs: loose_height/)\n"
+            f"({pin['runs']} crimp run{'' if pin['runs'] == 1 else 's'}: loose_height/)\n"
             for f, h in pin["loose_height_m"].items())
     return "".join(
         f"  {f}: expansion {t['expansion']:+.4f} from its loose rest crimp "

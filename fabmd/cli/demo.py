@@ -62,7 +62,7 @@ def run(args) -> int:
     pin = c.get("pinned_crimp")
     heights = "" if not pin else (
         "; loose sections " + " / ".join(f"{1e3 * h:.3f}" for h in pin["loose_height_m"].values())
-        + f" mm high for the stated crimp (found in {pin['runs']} crimp runs)")
+        + f" mm high for the stated crimp (found in {_runs(pin['runs'])})")
     say(f"2. crimp (periodic cell, {c['crimped']['n_beads']} beads, {c['wall_s']:.1f} s): "
         f"thickness {1e3 * c['loose']['thickness_m']:.2f} -> "
         f"{1e3 * c['crimped']['thickness_m']:.2f} mm, crimp (per fibre) "
@@ -201,3 +201,7 @@ def _overview(out: Path, tension: dict, frame: dict, cell: dict | None = None) -
                                    "stage", fig.get_figwidth()))
     fig.savefig(out / "demo.png", dpi=150)
     plt.close(fig)
+
+
+def _runs(n: int) -> str:
+    return f"{n} crimp run" + ("" if n == 1 else "s")

@@ -80,7 +80,7 @@ from ..errors import CalibrationNotReached, InputError, SimulationFailed
 from ..model.bead_model import BeadModel
 from ..results.folder import prepare_run_folder, write_json
 from ..scene.outputs import TrajectoryOutput
-from .calibrate_knobs import check_targets, default_thickness_families
+from .calibrate_knobs import LOOSE_HEIGHT_RANGE, check_targets, default_thickness_families
 from .calibrate_search import CoupledSearch, Knob, next_strain, on_grid
 from .crimp import CRIMP_BY, Crimp, CrimpResult
 
@@ -120,6 +120,10 @@ class CrimpTargets:
             balanced weave stays balanced, where two free heights can part, one family
             drawn higher than the other for the same crimps); the group's knob is its
             mean crimp, and each family's crimp is reported against the target.
+        loose_height_start: with ``crimp_by = "loose_height"``, the relative change s of
+            a family's loose height its first run draws (default 0: the scene's height;
+            a tied group starts where its families do, which must agree); set from
+            ``[crimp] loose_height_start_m`` by :func:`fabmd.loose_height.pin_crimp`.
     """
 
     thickness_m: float | None = field(default=None, metadata=schema.unit("length"))
@@ -135,6 +139,7 @@ class CrimpTargets:
     datasheet: bool = True
     crimp_by: str = "expansion"
     tied_heights: tuple[tuple[str, ...], ...] = ()
+    loose_height_start: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self):
         from .crimp_tension import check_target_tension
@@ -175,6 +180,9 @@ class CrimpTargets:
         if self.crimp_by not in CRIMP_BY:
             raise InputError(f"calibrate.crimp_by must be one of {', '.join(CRIMP_BY)}, "
                              f"got {self.crimp_by!r}")
+        for fam, value in self.loose_height_start.items():
+            inputs.in_range(f"calibrate.loose_height_start.{fam}", value,
+                            *LOOSE_HEIGHT_RANGE)
         if self.crimp_by == "loose_height" and not self.crimp_pct:
             raise InputError("calibrate.crimp_by = \"loose_height\" moves the loose "
                              "height to reach a crimp: give calibrate.crimp_pct too")

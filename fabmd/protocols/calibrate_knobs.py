@@ -54,6 +54,17 @@ def _compaction(targets: CrimpTargets, compaction):
                                datasheet_pressure_pa=p, unload=False)
 
 
+def height_start(targets: CrimpTargets, group: tuple[str, ...]) -> float:
+    """The relative loose height a knob of ``group`` starts at (0: the scene's); the
+    families of a tied group start at one height."""
+    starts = {targets.loose_height_start.get(fam, 0.0) for fam in group}
+    if len(starts) > 1:
+        raise InputError(f"crimp.loose_height_start_m: {', '.join(group)} are drawn alike "
+                         f"and their loose height moves as one, so they start at one "
+                         f"height; got {sorted(starts)} (relative to the yarns' height_m)")
+    return on_grid(starts.pop())
+
+
 def _bounds(model: BeadModel, targets: CrimpTargets, fams: tuple[str, ...],
             kind: str) -> tuple[float, float]:
     if targets.strain_range is not None:
@@ -108,8 +119,9 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
     for group in tied:  # one loose height for the group, each family's crimp reported
         target = float(targets.crimp_pct[group[0]])
         knobs.append(Knob("crimp:" + "+".join(group), "crimp", group, target,
-                          targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE, 0.0,
-                          first_step=0.1, acts_on="loose_height"))
+                          targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE,
+                          height_start(targets, group), first_step=0.1,
+                          acts_on="loose_height"))
         uncontrolled.extend(Knob(f"crimp:{fam}", "crimp", (fam,), target,
                                  targets.crimp_tolerance_pct, +1, (-1.0, 1.0), 0.0,
                                  acts_on="tied_height") for fam in group)
@@ -119,8 +131,9 @@ def make_knobs(model: BeadModel, targets: CrimpTargets, base: Crimp,
             continue
         if by_height:  # the loose section, not the expansion: never taken by the thickness
             knobs.append(Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),
-                              targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE, 0.0,
-                              first_step=0.1, acts_on="loose_height"))
+                              targets.crimp_tolerance_pct, +1, LOOSE_HEIGHT_RANGE,
+                              height_start(targets, (fam,)), first_step=0.1,
+                              acts_on="loose_height"))
             continue
         bounds = _bounds(model, targets, (fam,), "crimp")
         knob = Knob(f"crimp:{fam}", "crimp", (fam,), float(crimp_target),

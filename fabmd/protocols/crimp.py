@@ -98,6 +98,20 @@ class Crimp:
             and ``fabmd demo``), not from :meth:`run` on a model.
         crimp_tolerance_pct: with ``crimp_by = "loose_height"``, how close each family's
             crimp comes to its target [percentage points] (> 0; default 0.05).
+        loose_height_start_m: with ``crimp_by = "loose_height"``, the loose section
+            height the search's first run draws [m], one for all searched families or
+            per family (``"0.57 mm"``, ``{ warp = "0.57 mm", weft = "0.6 mm" }``);
+            default the yarns' ``height_m``, and the search's range stays a half to one
+            and a half times that. A start where a discretisation's search ended before
+            saves its runs and makes the fabric independent of the search's path: the
+            search accepts the first run within ``crimp_tolerance_pct``, and a run at the
+            tolerance's edge is accepted on one rank count and not on another (round-off
+            grown through a crimp moves a family's crimp by about 0.02 pp), after which
+            the two crimp different fabrics (benchmarks/RESULTS.md "The demo on 2 ranks
+            against one, idle", "The demo from a stated start"). Read but not used
+            without ``crimp_by = "loose_height"``, as ``crimp_tolerance_pct`` (a scene
+            whose search was taken out keeps its drawn sections: set ``[yarns.<family>]
+            height_m`` to draw them at that height).
         settle_force_n: the force a virtual fibre is meant to carry once crimped [N]: the
             relaxation's quasi-static reference (its force residual and kinetic-energy
             floor are judged against it). Set by the tension search to its target per
@@ -138,6 +152,7 @@ class Crimp:
     auto_margin_pct: float = 3.0
     crimp_by: str = "expansion"
     crimp_tolerance_pct: float = 0.05
+    loose_height_start_m: dict[str, float | str] | float | str | None = None
     settle_force_n: float | None = None
     release_tension: bool = False
     handling_tension: dict | str | float = "0.05 cN/tex"
@@ -167,10 +182,44 @@ class Crimp:
             from .crimp_tension import check_target_tension
 
             check_target_tension(self.handling_tension, "crimp.handling_tension")
+        if self.loose_height_start_m is not None:
+            object.__setattr__(self, "loose_height_start_m", self._start_heights())
         if self.crimp_by == "loose_height":
             self._check_loose_height()
         elif self.target_crimp_pct:
             self._check_crimp_targets()
+        if self.crimp_by == "loose_height":
+            self.start_heights_m()  # names only searched families
+
+    def _start_heights(self) -> dict[str, float] | float:
+        """``loose_height_start_m`` read into metres (a dict per family or one value)."""
+        from ..units import quantity
+
+        key = "crimp.loose_height_start_m"
+        given = self.loose_height_start_m
+        if isinstance(given, dict):
+            heights = {fam: quantity(v, "length", f"{key}.{fam}") for fam, v in given.items()}
+            for fam, h in heights.items():
+                inputs.positive(f"{key}.{fam}", h)
+            return heights
+        height = quantity(given, "length", key)
+        inputs.positive(key, height)
+        return height
+
+    def start_heights_m(self) -> dict[str, float]:
+        """The loose height [m] the search starts from per family of
+        ``target_crimp_pct`` that ``loose_height_start_m`` names ({} where it is None)."""
+        given = self.loose_height_start_m
+        if given is None:
+            return {}
+        if isinstance(given, dict):
+            unknown = sorted(set(given) - set(self.target_crimp_pct))
+            if unknown:
+                raise InputError(f"crimp.loose_height_start_m names {unknown}, whose crimp "
+                                 f"is not searched (crimp.target_crimp_pct names "
+                                 f"{sorted(self.target_crimp_pct)})")
+            return dict(given)
+        return {fam: float(given) for fam in self.target_crimp_pct}
 
     @property
     def pins_crimp(self) -> bool:
@@ -403,7 +452,7 @@ class Crimp:
             return crimp_to_tension(self, model, out, engine=engine, overwrite=overwrite,
                                     quiet=quiet)
         shrink = self.shrink_warnings(model)
-        if mpi.is_root():
+        if mpi.is_root() and not quiet:  # a search's runs: judged on what they crimp
             for message in shrink:
                 warnings.warn(message, UserWarning, stacklevel=2)
         model = with_room_in_z(model)
