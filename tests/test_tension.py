@@ -233,16 +233,45 @@ def test_an_initial_stiffness_fitted_over_a_flagged_toe_is_marked():
     import types
 
     test = Tension()
-    flagged = types.SimpleNamespace(summary={
+    flagged = types.SimpleNamespace(curve={}, summary={
         "transition_elongation_pct": 1.58, "quasi_static": {"flagged": [[0.0, 1.75]]}})
     test.after_verdict(flagged)
     assert flagged.summary["initial_stiffness_trusted"] is False
     assert "0-1.58 %" in flagged.summary["initial_stiffness_note"]
-    past_toe = types.SimpleNamespace(summary={
+    past_toe = types.SimpleNamespace(curve={}, summary={
         "transition_elongation_pct": 1.58, "quasi_static": {"flagged": [[4.0, 4.5]]}})
     test.after_verdict(past_toe)
     assert past_toe.summary["initial_stiffness_trusted"] is True
     assert "initial_stiffness_note" not in past_toe.summary
+    # the optical gauge's toe ends at its own transition (gauge strain 1.2 %), which the
+    # gauge reaches at 1.6 % clamp elongation here (the clamps' ends strain more): the
+    # flagged 0-1.5 % covers part of it
+    elongation = np.linspace(0.0, 4.0, 41)
+    gauge = types.SimpleNamespace(
+        curve={"elongation_pct": elongation, "gauge_strain_pct": 0.75 * elongation},
+        summary={"transition_elongation_pct": 1.0, "quasi_static": {"flagged": [[0.0, 1.5]]},
+                 "optical_gauge": {"transition_strain_pct": 1.2}})
+    test.after_verdict(gauge)
+    optical = gauge.summary["optical_gauge"]
+    assert optical["initial_stiffness_trusted"] is False
+    assert "gauge strain 0-1.2 %: clamp elongation 0-1.6 %" in optical["initial_stiffness_note"]
+    assert "over 0-1.5 %" in optical["initial_stiffness_note"]
+    gauge.summary["quasi_static"]["flagged"] = [[1.75, 2.0]]
+    test.after_verdict(gauge)  # past the gauge's toe: trusted
+    assert gauge.summary["optical_gauge"]["initial_stiffness_trusted"] is True
+    # the bias extension fits against the displacement, 0 to its transition (4 mm here,
+    # 20 deg on this curve); its intervals are in shear angle
+    from fabmd.protocols.bias_extension import BiasExtension
+
+    bias = types.SimpleNamespace(
+        curve={"displacement_m": np.linspace(0, 0.01, 11),
+               "shear_angle_deg": np.linspace(0, 50, 11)},
+        summary={"transition_displacement_m": 0.004,
+                 "quasi_static": {"flagged": [[0.0, 5.0], [15.0, 20.0], [30.0, 35.0]]}})
+    BiasExtension().after_verdict(bias)
+    assert bias.summary["initial_stiffness_trusted"] is False
+    assert ("displacement 0-4 mm: shear angle 0-20 deg) is not quasi-static over 0-5 deg, "
+            "15-20 deg") in bias.summary["initial_stiffness_note"]
     # the periodic tension fits over 10-40 % of its range: 0.2-0.8 % of a 2 % test
     from fabmd.protocols.periodic import PeriodicTension
 

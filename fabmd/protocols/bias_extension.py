@@ -44,6 +44,7 @@ from .driven import ClampedTest, DrivenResult
 from .driven_outputs import energy_columns, read_outputs
 from .end_clamps import EndClampedTest
 from .tension import Tension
+from .verdict import mark_fitted_stiffness
 
 PROTOCOL = "bias_extension"
 
@@ -172,6 +173,18 @@ class BiasExtension(EndClampedTest):
         return tension.input_text(model,
                                   header=f"{PROTOCOL} (clamping and loading of tension)")
 
+    def after_verdict(self, result: DrivenResult) -> None:
+        """The initial stiffness is fitted against the displacement, 0 to the bilinear
+        transition; the intervals are in shear angle: marked where the verdict flags part
+        of 0 to the angle at that displacement (as the tension's toe)."""
+        d_break = result.summary.get("transition_displacement_m")
+        if d_break is None:
+            return
+        angle = float(np.interp(d_break, result.curve["displacement_m"],
+                                result.curve["shear_angle_deg"]))
+        mark_fitted_stiffness(result.summary, 0.0, angle, "deg",
+                              fitted_on=f"displacement 0-{1e3 * d_break:.3g} mm: shear angle ")
+
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> DrivenResult:
         return reduce(run_dir, model, self, monitor)
@@ -217,6 +230,7 @@ def reduce(run_dir: Path, model: BeadModel, test: BiasExtension,
         "max_shear_angle_deg": float(gamma.max()),
         "initial_stiffness_n_m": fit["initial_slope"],  # force per displacement
         "final_stiffness_n_m": fit["final_slope"],
+        "transition_displacement_m": fit["break_x"],
         "force_at_angle_n": {f"{k:g}": v for k, v in values_at(
             gamma, force, test.report_angles_deg).items()},
         "max_force_n": float(force.max()),

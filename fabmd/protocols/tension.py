@@ -191,8 +191,20 @@ class Tension(EndClampedTest):
         the verdict flags part of it, the toe's force is drag and inertia, not the fabric's
         (the example's released toe at 0.5-0.75 %: 2.64 / 0.53 / 0.08 N at 2e-4 / 1e-4 /
         5e-5, benchmarks/RESULTS.md "The tension toe is drag")."""
-        mark_fitted_stiffness(result.summary, 0.0,
-                              result.summary.get("transition_elongation_pct"), "%")
+        summary = result.summary
+        mark_fitted_stiffness(summary, 0.0, summary.get("transition_elongation_pct"), "%")
+        optical = summary.get("optical_gauge")
+        gauge = result.curve.get("gauge_strain_pct")
+        if optical and gauge is not None and optical.get("transition_strain_pct") is not None:
+            # the gauge's toe, 0 to its own transition, in the clamp elongation the
+            # intervals are judged in: where the gauge strain first reaches it
+            reach = np.nonzero(np.asarray(gauge) >= optical["transition_strain_pct"])[0]
+            if len(reach):
+                high = float(np.asarray(result.curve["elongation_pct"])[reach[0]])
+                mark_fitted_stiffness(summary, 0.0, high, "%", into=optical,
+                                      fitted_on="gauge strain 0-"
+                                      f"{optical['transition_strain_pct']:.3g} %: clamp "
+                                      "elongation ")
 
     def reduce(self, run_dir: Path, model: BeadModel,
                monitor: ContactPower | None = None) -> TensionResult:

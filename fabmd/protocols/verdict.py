@@ -99,22 +99,28 @@ def quasi_static_verdict(summary: dict, limits: dict[str, float] | None = None) 
             "trusted": trusted, "partly": bool(whole_run_ok and flagged and trusted)}
 
 
-def mark_fitted_stiffness(summary: dict, low: float, high: float | None, unit: str) -> None:
+def mark_fitted_stiffness(summary: dict, low: float, high: float | None, unit: str,
+                          into: dict | None = None, fitted_on: str = "") -> None:
     """Say whether ``initial_stiffness`` (fitted over ``low``-``high`` of the curve's
-    interval axis, in ``unit``) comes from quasi-static intervals: where the verdict flags
-    part of that range, ``initial_stiffness_trusted`` is false and
-    ``initial_stiffness_note`` names the part (an upper bound: its force holds drag)."""
+    interval axis, in ``unit``) comes from quasi-static intervals: where the verdict of
+    ``summary`` flags part of that range, ``initial_stiffness_trusted`` is false and
+    ``initial_stiffness_note`` names the part (an upper bound: its force holds drag).
+    ``into``: the dict that gets the two keys (default ``summary``; the tension's
+    ``optical_gauge``); ``fitted_on``: where the fit's own axis differs from the
+    intervals' (the gauge strain, the bias extension's displacement), what it is, said in
+    the note."""
     flagged = (summary.get("quasi_static") or {}).get("flagged") or []
     if high is None or not np.isfinite(high):
         return
+    into = summary if into is None else into
     overlap = [(max(a, low), min(b, high)) for a, b in flagged if a < high and b > low]
-    summary["initial_stiffness_trusted"] = not overlap
+    into["initial_stiffness_trusted"] = not overlap
     if overlap:
         where = ", ".join(f"{a:.3g}-{b:.3g} {unit}" for a, b in overlap)
-        summary["initial_stiffness_note"] = (
-            f"not the fabric's: the range it is fitted over ({low:.3g}-{high:.3g} {unit}) is "
-            f"not quasi-static over {where} (drag and inertia in the force; it falls with "
-            f"the speed); an upper bound: lower speed_fraction to measure it")
+        into["initial_stiffness_note"] = (
+            f"not the fabric's: the range it is fitted over ({fitted_on}{low:.3g}-{high:.3g} "
+            f"{unit}) is not quasi-static over {where} (drag and inertia in the force; it "
+            f"falls with the speed); an upper bound: lower speed_fraction to measure it")
 
 
 def start_spike_ratio(force, fraction: float = 0.05) -> float | None:
