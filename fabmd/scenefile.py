@@ -6,7 +6,8 @@ Sections fabmd owns (unknown keys in them are refused, naming the key)::
     [fabric]         architecture and its pattern, tiling, periodic, clearance_m, plateau
     [yarns.warp]     YarnSpec fields: material, linear_density_tex, width_m, height_m,
     [yarns.weft]       n_fibres, spacing_m or count_per_m, name, shape,
-                       fibre_volume_fraction, filament_diameter_m, filament_count
+                       fibre_volume_fraction, filament_diameter_m, filament_count,
+                       fibre_packing, bending_stiffness_nm2 (N·m² or "filaments")
     [yarns.binder]   (3D architectures only)
     [materials.NAME] FibreMaterial fields: modulus_pa, density_kg_m3
     [discretisation] Discretisation fields: spacing_ratio, mass_scaling, bending_factor,

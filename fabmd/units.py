@@ -21,6 +21,7 @@ speed               m/s, mm/s, mm/min, m/min
 angle               rad, deg
 count_per_length    1/m, 1/cm, 1/mm (also "/cm", "ends/cm", "picks/cm")
 areal_density       kg/m2, g/m2
+bending_stiffness   N·m2 (also N.m2, N*m2), N·mm2, cN·cm2 (E·I of a yarn)
 ==================  =====================================================
 """
 
@@ -49,6 +50,10 @@ _UNITS: dict[str, dict[str, float]] = {
     "count_per_length": {"1/m": 1.0, "1/cm": 1e2, "1/mm": 1e3, "/m": 1.0, "/cm": 1e2,
                          "/mm": 1e3, "ends/cm": 1e2, "picks/cm": 1e2, "percm": 1e2},
     "areal_density": {"kg/m2": 1.0, "g/m2": 1e-3, "gsm": 1e-3},
+    "bending_stiffness": {f"{force}{dot}{length}{square}": si
+                          for force, length, si in (("N", "m", 1.0), ("N", "mm", 1e-6),
+                                                    ("cN", "cm", 1e-6))
+                          for dot in ("·", ".", "*") for square in ("2", "²", "^2")},
 }
 # case-insensitive kinds (SI prefixes of Pa and N never clash there)
 _CASE_FREE = {"pressure", "force", "stiffness"}

@@ -98,6 +98,8 @@ def summarise(model, scene) -> dict:
                   for k, f in enumerate(fams)},
         "bond_types": len(model.bond_type_table),
         "fibre_diameter_m": {f: info["families"][f]["fibre_diameter_m"] for f in fams},
+        "yarn_bending_stiffness_nm2": {
+            f: info["families"][f].get("yarn_bending_stiffness_nm2", 0.0) for f in fams},
         "clearance_m": info["clearance_m"],
         "clearance_pair": info["clearance_pair"],
         "thickness_m": info["loose_thickness_m"],
@@ -150,7 +152,19 @@ def datasheet_lines(s: dict) -> str:
             + (f", woven width {1e3 * p['woven_width_m']:.3g} mm"
                if abs(p["woven_width_m"] - p["width_m"]) > 1e-12 else "") + ")"
             for f, p in pack.items())
-    return line + law_line(s)
+    return line + bending_line(s) + law_line(s)
+
+
+def bending_line(s: dict) -> str:
+    """The yarns' bending rigidity where they have one (text)."""
+    texts = {}
+    for f, ei in (s.get("yarn_bending_stiffness_nm2") or {}).items():
+        if ei > 0:
+            texts.setdefault(f"{1e6 * ei:.3g} N·mm²", []).append(f)
+    if not texts:
+        return ""
+    return "\n  yarn bending stiffness E·I: " + "; ".join(
+        f"{', '.join(fams)} {text}" for text, fams in texts.items())
 
 
 def run(args) -> int:

@@ -60,17 +60,22 @@ class VirtualFibre:
         material: filament material.
         area_m2: filament cross-section carried by this virtual fibre [m²].
         diameter_m: contact (bead) diameter [m].
+        bending_stiffness_nm2: its share of the yarn's bending rigidity E·I [N·m²]
+            (0: a string of beads with no bending term).
     """
 
     material: FibreMaterial
     area_m2: float
     diameter_m: float
+    bending_stiffness_nm2: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "area_m2", inputs.positive(
             "fibre.area_m2", quantity(self.area_m2, "area", "fibre.area_m2")))
         object.__setattr__(self, "diameter_m", inputs.positive(
             "fibre.diameter_m", quantity(self.diameter_m, "length", "fibre.diameter_m")))
+        object.__setattr__(self, "bending_stiffness_nm2", inputs.non_negative(
+            "fibre.bending_stiffness_nm2", self.bending_stiffness_nm2))
 
     @classmethod
     def solid(cls, material: FibreMaterial, diameter_m: float) -> VirtualFibre:
@@ -80,13 +85,16 @@ class VirtualFibre:
 
     @classmethod
     def from_yarn(cls, material: FibreMaterial, linear_density_tex: float, n_fibres: int,
-                  diameter_m: float) -> VirtualFibre:
-        """One of ``n_fibres`` virtual fibres sharing a yarn's filament area.
+                  diameter_m: float, yarn_bending_stiffness_nm2: float = 0.0) -> VirtualFibre:
+        """One of ``n_fibres`` virtual fibres sharing a yarn's filament area (and its
+        bending rigidity: each fibre bends about its own axis, so the yarn's E·I is the
+        sum of its fibres' whatever their number).
 
         Args:
             linear_density_tex: yarn linear density [tex = g/km] (accepts "1200 tex").
             n_fibres: virtual fibres per yarn (>= 1).
             diameter_m: contact diameter of each virtual fibre [m].
+            yarn_bending_stiffness_nm2: the yarn's bending rigidity E·I [N·m²] (0: none).
         """
         tex = linear_density_tex
         if isinstance(tex, str):
@@ -94,7 +102,8 @@ class VirtualFibre:
         tex = inputs.positive("yarn.linear_density_tex", tex)
         n = inputs.positive_int("yarn.n_fibres", n_fibres)
         area = tex * 1e-6 / material.density_kg_m3 / n
-        return cls(material, area, diameter_m)
+        bending = inputs.non_negative("yarn bending stiffness", yarn_bending_stiffness_nm2)
+        return cls(material, area, diameter_m, bending / n)
 
     @property
     def axial_stiffness_n(self) -> float:

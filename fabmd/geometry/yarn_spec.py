@@ -22,6 +22,8 @@ FILAMENT_TOLERANCE = 0.1
 AREAL_DENSITY_TOLERANCE = 0.03
 #: and exceed it by at most this mean crimp
 MAX_DATASHEET_CRIMP = 0.3
+#: ``bending_stiffness_nm2`` of a yarn whose filaments bend each on its own
+FILAMENTS = "filaments"
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,11 @@ class YarnSpec:
         fibre_packing: how the virtual fibres fill the section, ``"inscribed"`` (default: all
             inside, as large as fits) or ``"area"`` (their hexagonal cells tile the
             section's area; :mod:`fabmd.geometry.section`).
+        bending_stiffness_nm2: the yarn's bending rigidity E·I [N·m²] (accepts
+            "0.3 N·mm2", "0.3 cN·cm2"), shared equally by its virtual fibres; or
+            ``"filaments"``: its filaments bending each on its own, E·(tex/ρ)·d_f²/16
+            (= count·E·π·d_f⁴/64; needs ``filament_diameter_m``), the lower bound of a dry
+            yarn's rigidity (filaments free to slide). Default: none (strings).
 
     Every yarn's filament area tex/ρ must fit its section at a yarn fibre volume
     fraction of at most :data:`PACKING_LIMIT`.
@@ -67,6 +74,7 @@ class YarnSpec:
     filament_diameter_m: float | None = None
     filament_count: int | None = None
     fibre_packing: str = "inscribed"
+    bending_stiffness_nm2: float | str | None = None
 
     def __post_init__(self):
         tex = self.linear_density_tex
@@ -94,6 +102,7 @@ class YarnSpec:
             object.__setattr__(self, "count_per_m", count)
             object.__setattr__(self, "spacing_m", 1.0 / count)
         self._check_filaments()
+        self._check_bending()
         width = self.width_m
         if width is None:
             if self.spacing_m is None:
@@ -150,6 +159,33 @@ class YarnSpec:
                 f"{1e6 * self.filament_area_m2:.4g} mm² ({100 * (ratio - 1):+.0f} %, allowed "
                 f"±{100 * FILAMENT_TOLERANCE:.0f} %): check tex, fibre density, filament "
                 f"diameter or count")
+
+    def _check_bending(self) -> None:
+        value = self.bending_stiffness_nm2
+        if value is None:
+            return
+        if isinstance(value, str) and value.strip() == FILAMENTS:
+            if self.filament_diameter_m is None:
+                raise InputError(
+                    f"yarn{' ' + self.name if self.name else ''}: bending_stiffness_nm2 = "
+                    f"\"{FILAMENTS}\" needs filament_diameter_m (the datasheet's filament "
+                    f"diameter, e.g. \"17 um\"), or give the rigidity in N·m²")
+            object.__setattr__(self, "bending_stiffness_nm2", FILAMENTS)
+            return
+        object.__setattr__(self, "bending_stiffness_nm2", inputs.non_negative(
+            "yarn.bending_stiffness_nm2",
+            quantity(value, "bending_stiffness", "yarn.bending_stiffness_nm2")))
+
+    @property
+    def yarn_bending_stiffness_nm2(self) -> float:
+        """The yarn's bending rigidity E·I [N·m²] (0: none; see ``bending_stiffness_nm2``)."""
+        value = self.bending_stiffness_nm2
+        if value is None:
+            return 0.0
+        if value == FILAMENTS:
+            d = self.filament_diameter_m
+            return self.material.modulus_pa * self.filament_area_m2 * d * d / 16.0
+        return float(value)
 
     @property
     def filament_area_m2(self) -> float:

@@ -45,7 +45,10 @@ class Discretisation:
         mass_scaling: factor on every bead mass (> 0). Quasi-static runs may use
             > 1 to take a larger time step; check rate independence when you do.
         bending_factor: fraction of the solid-rod bending stiffness E·I given to
-            each virtual fibre, in [0, 1]; 0 (default) adds no bending term.
+            each virtual fibre, in [0, 1]; 0 (default) adds no bending term. A number
+            whose meaning changes with the fibres per yarn: the yarn's own rigidity
+            (``[yarns.*] bending_stiffness_nm2``, shared by its fibres) is the physical
+            way to give it; a scene takes one or the other.
         bead_register: where each fibre's beads sit along it. ``"aligned"`` (default):
             every fibre's first bead at the yarn's start, so the fibres of a yarn are in
             register. ``"staggered"``: fibre k of a yarn starts φ_k·l0 further on,
@@ -153,12 +156,18 @@ def bead_parameters(fibre: VirtualFibre, discretisation: Discretisation | None =
     disc = discretisation or Discretisation()
     l0 = disc.spacing_ratio * fibre.diameter_m if bond_length_m is None else bond_length_m
     l0 = inputs.positive("bond_length_m", l0)
+    bending = disc.bending_factor * fibre.solid_bending_stiffness_nm2
+    if fibre.bending_stiffness_nm2 > 0:
+        if disc.bending_factor > 0:
+            raise InputError("the yarns give their bending stiffness (bending_stiffness_nm2) "
+                             "and [discretisation] bending_factor gives another: keep one")
+        bending = fibre.bending_stiffness_nm2
     return BeadParameters(
         diameter_m=fibre.diameter_m,
         bond_length_m=l0,
         mass_kg=fibre.mass_per_length_kg_m * l0 * disc.mass_scaling,
         axial_stiffness_n=fibre.axial_stiffness_n,
-        bending_stiffness_nm2=disc.bending_factor * fibre.solid_bending_stiffness_nm2,
+        bending_stiffness_nm2=bending,
     )
 
 

@@ -130,7 +130,8 @@ def _loose_crimp_and_mass(fabric: Fabric, fams: dict[str, FamilyBeads],
 
 
 def _spec_facts(fams: dict[str, FamilyBeads], table: dict) -> dict[str, dict]:
-    """Per yarn spec key: tex, fibres, section, fibre and bead sizes, E·A, material."""
+    """Per yarn spec key: tex, fibres, section, fibre and bead sizes, E·A, the yarn's E·I,
+    material."""
     per_family = {}
     for fam, fb in fams.items():
         spec = table[fam]
@@ -140,6 +141,7 @@ def _spec_facts(fams: dict[str, FamilyBeads], table: dict) -> dict[str, dict]:
             "fibre_diameter_m": fb.fibre.diameter_m, "fibre_area_m2": fb.fibre.area_m2,
             "bond_length_m": fb.beads.bond_length_m,
             "axial_stiffness_n": fb.fibre.axial_stiffness_n,
+            "yarn_bending_stiffness_nm2": spec.yarn_bending_stiffness_nm2,
             "modulus_pa": spec.material.modulus_pa,
             "density_kg_m3": spec.material.density_kg_m3, "material": spec.material.name,
             "fill_fraction": spec.section.fill_fraction(spec.n_fibres),

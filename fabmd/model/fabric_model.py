@@ -66,7 +66,8 @@ def family_beads(fabric: Fabric, discretisation: Discretisation | None = None
     out = {}
     for fam, spec in fabric.specs().items():
         offsets, d = spec.packing()
-        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d)
+        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d,
+                                       spec.yarn_bending_stiffness_nm2)
         out[fam] = FamilyBeads(fam, fibre, offsets, bead_parameters(fibre, disc))
     return out
 
@@ -79,7 +80,8 @@ def yarn_spec_beads(fabric: Fabric, discretisation: Discretisation | None = None
     out = {}
     for key, spec in fabric.yarn_spec_table().items():
         offsets, d = spec.packing()
-        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d)
+        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d,
+                                       spec.yarn_bending_stiffness_nm2)
         out[key] = FamilyBeads(key.split(":")[0], fibre, offsets, bead_parameters(fibre, disc))
     return out
 
@@ -385,7 +387,7 @@ def _links(fibre_ids: np.ndarray, fibre_type: np.ndarray, counts: list[int], per
     angles = np.zeros((0, 3), np.int64)
     angle_types = np.zeros(0, np.int64)
     angle_table: list[AngleType] = []
-    if disc.bending_factor > 0:
+    if any(p.bending_stiffness_nm2 > 0 for p in type_params):
         angle_table = [AngleType(p.angle_coefficient, bt.family)
                        for p, bt in zip(type_params, type_table, strict=True)]
         j = np.flatnonzero((fibre_ids[:-2] == fibre_ids[1:-1]) & (fibre_ids[1:-1] == fibre_ids[2:]))
