@@ -17,6 +17,7 @@ from fabmd.results.measure import family_crimp, family_tension_n
 from fabmd.scene import blocks
 from fabmd.scene.outputs import TrajectoryOutput
 
+from .cantilever import tip_deflection
 from .fabrics import parallel_fibres, plain_weave_cell
 
 
@@ -100,11 +101,8 @@ def test_bad_cohesion_input_is_refused():
 def _cantilever_deflection(factor: float, tmp_path) -> tuple[float, float]:
     """Tip deflection of a clamped two-fibre yarn under a small in-plane tip force, by
     energy minimisation in LAMMPS, and the composite-beam value F·L³/(3·E·I)."""
-    from fabmd.engine.library import new_instance
-
     d = 0.5e-3
     yarn = add_cohesion(_one_yarn(n_fibres=2, length_m=6e-3, diameter_m=d), factor)
-    yarn.save(tmp_path, "model")
     x = yarn.positions[:, 0]
     held = np.flatnonzero(x < 1.25 * d)  # first three beads of each fibre: a clamp
     tip = np.flatnonzero(x > x.max() - 1e-9)
@@ -113,24 +111,7 @@ def _cantilever_deflection(factor: float, tmp_path) -> tuple[float, float]:
     # two fibres of E·A at ±d/2 from the neutral axis: E·I = 2·E·A·(d/2)²
     ei = 2.0 * (2.0 * bt.coefficient * bt.rest_length_m) * (d / 2) ** 2
     force = 1e-3 * 3.0 * ei / length**2  # tip deflection 1e-3 of the length
-    lmp = new_instance(["-log", "none", "-screen", "none"])
-    try:
-        lmp.commands_string("\n".join([
-            blocks.setup(yarn, "cantilever", str(tmp_path / "model.data"),
-                         0.5 * model_critical_time_step_s(yarn)),
-            blocks.bonds(yarn),
-            f"pair_style zero {d}\npair_coeff * *",
-            "group held id " + " ".join(str(i + 1) for i in held),
-            "group tip id " + " ".join(str(i + 1) for i in tip),
-            "fix hold held setforce 0 0 0",
-            f"fix push tip addforce 0 {-float(force) / len(tip)!r} 0",
-            "min_style fire",  # force-based: SI energies are too small for a line search
-            "minimize 0 1e-12 1000000 1500000",
-        ]))
-        pos = np.array(lmp.gather_atoms("x", 1, 3)).reshape(-1, 3)
-    finally:
-        lmp.close()
-    deflection = -float((pos[tip, 1] - yarn.positions[tip, 1]).mean())
+    deflection = tip_deflection(yarn, tmp_path, held, tip, force)
     return deflection, force * length**3 / (3.0 * ei)
 
 

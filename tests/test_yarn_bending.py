@@ -19,8 +19,8 @@ from fabmd.model.bead_model import AngleType
 from fabmd.model.beads import Discretisation
 from fabmd.model.bending import chain_triples
 from fabmd.model.fabric_model import render_loose
-from fabmd.scene import blocks
 
+from .cantilever import tip_deflection
 from .fabrics import parallel_fibres
 
 
@@ -87,11 +87,7 @@ def _cantilever_deflection(spacing_ratio: float, tmp_path) -> tuple[float, float
     are, no contact) under a small tip force, by energy minimisation in LAMMPS; the
     discrete chain's closed form (each inner bead a hinge of stiffness E·I/l0) and the
     beam's F·L³/(3·E·I)."""
-    from fabmd.engine.library import new_instance
-    from fabmd.model.beads import model_critical_time_step_s
-
-    d = 0.5e-3
-    chain = parallel_fibres(n=1, length_m=4e-3, diameter_m=d, spacing_ratio=spacing_ratio)
+    chain = parallel_fibres(n=1, length_m=4e-3, diameter_m=0.5e-3, spacing_ratio=spacing_ratio)
     l0 = chain.bond_type_table[0].rest_length_m
     # about the solid fibre's E·A·d²/16: far softer bending than the bonds leaves the
     # minimiser unconverged after millions of steps
@@ -100,30 +96,13 @@ def _cantilever_deflection(spacing_ratio: float, tmp_path) -> tuple[float, float
     chain = dataclasses.replace(chain, angles=triples,
                                 angle_types=np.ones(len(triples), np.int64),
                                 angle_type_table=[AngleType(ei / l0, "warp")])
-    chain.save(tmp_path, "model")
     x = chain.positions[:, 0]
     held = np.flatnonzero(x < 1.5 * l0)  # two beads: a clamp
     tip = np.flatnonzero(x > x.max() - 1e-9)
     length = x.max() - x[held].max()
     force = 1e-3 * 3.0 * ei / length**2  # tip deflection 1e-3 of the length
-    lmp = new_instance(["-log", "none", "-screen", "none"])
-    try:
-        lmp.commands_string("\n".join([
-            blocks.setup(chain, "cantilever", str(tmp_path / "model.data"),
-                         0.5 * model_critical_time_step_s(chain)),
-            blocks.bonds(chain),
-            f"pair_style zero {d}\npair_coeff * *",
-            "group held id " + " ".join(str(i + 1) for i in held),
-            "group tip id " + " ".join(str(i + 1) for i in tip),
-            "fix hold held setforce 0 0 0",
-            f"fix push tip addforce 0 {-float(force)!r} 0",
-            "min_style fire",
-            "minimize 0 1e-14 2000000 3000000",
-        ]))
-        pos = np.array(lmp.gather_atoms("x", 1, 3)).reshape(-1, 3)
-    finally:
-        lmp.close()
-    deflection = -float(pos[tip, 1][0] - chain.positions[tip, 1][0])
+    deflection = tip_deflection(chain, tmp_path, held, tip, force, max_steps=2_000_000,
+                                force_tolerance_n=1e-14)
     # m hinges at L, L - l0, ... l0 from the tip, each turning by F·r·l0/E·I
     m = round(length / l0)
     hinges = force * l0**3 / ei * m * (m + 1) * (2 * m + 1) / 6.0
