@@ -67,6 +67,8 @@ class Unit:
             text = str(exc)
             if text.startswith(f"{name}: "):
                 text = f"{name} = {value!r}: {text[len(name) + 2:]}"
+            if self.words:
+                text += f" (or the word {' / '.join(repr(w) for w in self.words)})"
             raise InputError(text) from None
         return si if self.si_per_unit == 1.0 else si / self.si_per_unit
 

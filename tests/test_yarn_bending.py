@@ -139,3 +139,6 @@ def test_a_scene_gives_the_rigidity_in_words_and_the_build_reports_it(tmp_path):
     data["yarns"]["warp"]["bending_stiffness_nm2"] = "3 N/m"
     with pytest.raises(InputError, match="bending_stiffness_nm2"):
         parse_scene(data)
+    data["yarns"]["warp"]["bending_stiffness_nm2"] = "filament"  # a typo of the word
+    with pytest.raises(InputError, match="or the word 'filaments'"):
+        parse_scene(data)
