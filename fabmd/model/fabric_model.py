@@ -65,10 +65,7 @@ def family_beads(fabric: Fabric, discretisation: Discretisation | None = None
     disc = discretisation or Discretisation()
     out = {}
     for fam, spec in fabric.specs().items():
-        offsets, d = spec.packing()
-        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d,
-                                       spec.yarn_bending_stiffness_nm2)
-        out[fam] = FamilyBeads(fam, fibre, offsets, bead_parameters(fibre, disc))
+        out[fam] = _spec_beads(fam, spec, disc)
     return out
 
 
@@ -79,11 +76,16 @@ def yarn_spec_beads(fabric: Fabric, discretisation: Discretisation | None = None
     disc = discretisation or Discretisation()
     out = {}
     for key, spec in fabric.yarn_spec_table().items():
-        offsets, d = spec.packing()
-        fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d,
-                                       spec.yarn_bending_stiffness_nm2)
-        out[key] = FamilyBeads(key.split(":")[0], fibre, offsets, bead_parameters(fibre, disc))
+        out[key] = _spec_beads(key.split(":")[0], spec, disc)
     return out
+
+
+def _spec_beads(family: str, spec, disc: Discretisation) -> FamilyBeads:
+    """One yarn spec's virtual fibre (its share of tex and E·I), packing and beads."""
+    offsets, d = spec.packing()
+    fibre = VirtualFibre.from_yarn(spec.material, spec.linear_density_tex, spec.n_fibres, d,
+                                   spec.yarn_bending_stiffness_nm2)
+    return FamilyBeads(family, fibre, offsets, bead_parameters(fibre, disc))
 
 
 def bead_parameter_list(model: BeadModel, fabric: Fabric,
