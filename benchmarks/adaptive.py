@@ -24,9 +24,10 @@ fixed speed the largest report difference to the run at half of it.
                                   [--write] [--out DIR] [--reuse]
 
 Report points: tension force at 2/4/6 % (to the example's 6 %; ``--fast``: to 8 %, at
-6/7/8 %, past that coupon's longer toe), picture frame F_norm at 10/20/30/40° (the issue's
-2 x 2-cell coupon), bias extension force at 10/20/30° (closed-form central angle), drape
-(``examples/drape.toml``: its blank and tools) punch force at 10/20/30 mm depth.
+6/7/8 %, past that coupon's longer toe), picture frame F_norm at 10/20/30/40° (the
+example's coupon, 3 x 3 cells with whole-yarn clamps), bias extension force at 10/20/30°
+(closed-form central angle), drape (``examples/drape.toml``: its blank and tools) punch
+force at 10/20/30 mm depth. Every test on the example's own coupon.
 ``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--write`` replaces
 the RESULTS section with this invocation's table (the section shipped holds two
 invocations' tables and their reading, written by hand). ``--out`` keeps the
@@ -107,9 +108,9 @@ def prepared_coupon(scene, test: str, root: Path, engine: Engine,
         return BeadModel.load(saved), scene
     crimped = load_crimped(crimp_dir, released=crimp_stage(scene).release_tension)
     coupon, _ = coupon_stage(scene, test)
-    if test == "picture-frame":  # the issue's 2 x 2-cell coupon
-        cell = scene.fabric.unit_cell_m
-        coupon = dataclasses.replace(coupon, length_m=2 * cell[0], width_m=2 * cell[1])
+    # the example's own coupons (the picture frame's is 3 x 3 cells with whole-yarn clamps:
+    # an override of its length and width, as this script had for the issue's 2 x 2 cells,
+    # does not apply to a coupon given in cells)
     model = coupon.run(crimped, root / f"coupon-{test}", engine=engine, overwrite=True).model
     model.save(root, "coupon")
     return model, scene
