@@ -37,12 +37,27 @@ def table(header: list[str], rows: list[list]) -> str:
 
 
 def update_section(name: str, body: str, command: str) -> None:
-    """Replace (or append) the section ``name`` of RESULTS.md."""
+    """Write a script's measurement (machine line, command, ``body``) into the section
+    ``name`` of RESULTS.md, leaving what was written there by hand.
+
+    The measurement sits between ``<!-- name: generated -->`` and ``<!-- /name: generated
+    -->`` inside the section, and a rerun replaces only that part: the reading and the
+    tables of earlier invocations that a section gathers by hand stay (until stop 46 a
+    ``--write`` replaced the whole section, "Ranks" with its hand-written reading among
+    them). A section without those marks gets the measurement added at its end; a missing
+    section is created with its heading."""
     text = RESULTS.read_text() if RESULTS.exists() else "# fabmd benchmark results\n"
     start, end = f"<!-- {name} -->", f"<!-- /{name} -->"
-    block = (f"{start}\n## {name}\n\nMeasured {machine()}.\nReproduce: `{command}`\n\n"
-             f"{body.strip()}\n{end}")
-    pattern = re.compile(re.escape(start) + r".*?" + re.escape(end), re.S)
-    text = pattern.sub(lambda _m: block, text) if pattern.search(text) else \
-        text.rstrip() + "\n\n" + block + "\n"
+    gen_start, gen_end = f"<!-- {name}: generated -->", f"<!-- /{name}: generated -->"
+    generated = (f"{gen_start}\nMeasured {machine()}.\nReproduce: `{command}`\n\n"
+                 f"{body.strip()}\n{gen_end}")
+    inner = re.compile(re.escape(gen_start) + r".*?" + re.escape(gen_end), re.S)
+    section = re.compile(re.escape(start) + r".*?" + re.escape(end), re.S)
+    if inner.search(text):
+        text = inner.sub(lambda _m: generated, text, count=1)
+    elif (found := section.search(text)) is not None:
+        kept = found.group(0)[:-len(end)].rstrip()
+        text = text[:found.start()] + f"{kept}\n\n{generated}\n{end}" + text[found.end():]
+    else:
+        text = text.rstrip() + f"\n\n{start}\n## {name}\n\n{generated}\n{end}\n"
     RESULTS.write_text(text)

@@ -28,9 +28,9 @@ Report points: tension force at 2/4/6 % (to the example's 6 %; ``--fast``: to 8 
 example's coupon, 3 x 3 cells with whole-yarn clamps), bias extension force at 10/20/30°
 (closed-form central angle), drape (``examples/drape.toml``: its blank and tools) punch
 force at 10/20/30 mm depth. Every test on the example's own coupon.
-``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--write`` replaces
-the RESULTS section with this invocation's table (the section shipped holds two
-invocations' tables and their reading, written by hand). ``--out`` keeps the
+``--fast``: coupons with 1 fibre per yarn (s/d stays the scene's 0.5). ``--write`` puts
+this invocation's table into the RESULTS section (its generated part: the tables and
+reading written there by hand stay). ``--out`` keeps the
 run folders; with ``--reuse`` a run whose folder already holds ``bench.json`` (written by
 this script after the run) is read back instead of run again.
 """

@@ -187,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--replot", action="store_true", help="no runs: read DIR")
     parser.add_argument("--write", action="store_true", help="update benchmarks/RESULTS.md")
     parser.add_argument("--section", default="Picture frame against coupon size",
-                        help="the RESULTS.md section --write replaces (or appends)")
+                        help="the RESULTS.md section --write writes into (or appends)")
     args = parser.parse_args(argv)
     scene = load_scene(args.scene)
     engine = Engine(backend="standalone" if args.ranks > 1 else "inprocess",

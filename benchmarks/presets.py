@@ -35,7 +35,7 @@ crimp and weaving tension.
     python benchmarks/presets.py [--write] [--resume] [--root DIR]
     python benchmarks/presets.py --pinned [--write] [--resume] [--root DIR]
 
-``--write`` replaces the RESULTS section "Presets against the reference"; results go to
+``--write`` writes into the RESULTS section "Presets against the reference"; results go to
 ``benchmarks/presets.json`` as they come (``--resume`` keeps those already there;
 ``--pinned`` keeps the study and adds or replaces its ``pinned`` records, with
 ``--resume`` only adds).

@@ -586,3 +586,31 @@ def test_adaptive_verdict_says_when_the_whole_curve_is_rejected():
         "no (trusted 2.5–6)"
     assert bench.verdict_text({"ok": False, "trusted": [[2.75, 6.0]], "partly": False}) == \
         "no (whole curve rejected; intervals 2.75–6)"
+
+
+def test_a_scripts_write_keeps_the_reading_written_by_hand(tmp_path, monkeypatch):
+    """``--write`` replaces only the script's generated part of its RESULTS section: the
+    reading written by hand around it stays, a section from before the marks gets the
+    measurement added at its end, a missing one is created."""
+    results = load_benchmark("_results")
+    monkeypatch.setattr(results, "RESULTS", tmp_path / "RESULTS.md")
+    results.update_section("Ranks", "| table | one |", "python benchmarks/ranks.py --write")
+    text = results.RESULTS.read_text()
+    assert "## Ranks" in text and "| table | one |" in text
+    # a reading written by hand under the table, then a rerun
+    results.RESULTS.write_text(text.replace("<!-- /Ranks -->",
+                                            "The reading, by hand.\n<!-- /Ranks -->"))
+    results.update_section("Ranks", "| table | two |", "python benchmarks/ranks.py --write")
+    text = results.RESULTS.read_text()
+    assert "| table | two |" in text and "| table | one |" not in text
+    assert "The reading, by hand." in text and text.count("## Ranks") == 1
+    # a section written before the marks: its text stays, the measurement comes after it
+    results.RESULTS.write_text("# r\n\n<!-- Old -->\n## Old\n\nHand-made table.\n<!-- /Old -->\n"
+                               "\n<!-- Next -->\n## Next\n<!-- /Next -->\n")
+    results.update_section("Old", "| new |", "cmd")
+    text = results.RESULTS.read_text()
+    assert text.index("Hand-made table.") < text.index("| new |") < text.index("<!-- /Old -->")
+    assert text.index("<!-- /Old -->") < text.index("<!-- Next -->")
+    results.update_section("Old", "| newer |", "cmd")
+    text = results.RESULTS.read_text()
+    assert "Hand-made table." in text and "| newer |" in text and "| new |" not in text
