@@ -32,7 +32,8 @@ force at 10/20/30 mm depth. Every test on the example's own coupon.
 this invocation's table into the RESULTS section (its generated part: the tables and
 reading written there by hand stay). ``--out`` keeps the
 run folders; with ``--reuse`` a run whose folder already holds ``bench.json`` (written by
-this script after the run) is read back instead of run again.
+this script after the run) is read back instead of run again, and so are a finished crimp
+folder (``OUT/<test>/crimp``, e.g. a copy of a demo's) and the relaxed coupon.
 """
 
 from __future__ import annotations
