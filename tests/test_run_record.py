@@ -33,6 +33,21 @@ def test_log_parser_reads_the_last_thermo_line_and_the_halts(tmp_path):
     assert read_run_end(tmp_path / "nothing") is None
 
 
+def test_a_relaxation_whose_undamped_run_spent_its_budget_says_so(tmp_path):
+    """The damped run's halt does not end a relaxation: its undamped run follows, and
+    one that never reached rest spent its budget (it read 'halted' before)."""
+    (tmp_path / "log.lammps").write_text(
+        "   Step          Time          KinEng\n         0   0   1.5\n"
+        "Fix halt condition for fix-id damped met on step 500 with value 1\n"
+        "Loop time of 0.02 on 1 procs for 500 steps with 64 atoms\n"
+        "   Step          Time          KinEng\n       500   0.1   0.25\n"
+        "      2500   0.5   0.20\n"
+        "Loop time of 0.02 on 1 procs for 2000 steps with 64 atoms\n")
+    end = read_run_end(tmp_path, relaxation=True)
+    assert end.final_step == 2500 and end.stopped_by == "budget"
+    assert end.halts == [["damped", 500]]
+
+
 @pytest.mark.lammps
 def test_crimp_that_halts_between_samples_reports_the_halt_step(tmp_path):
     # few history lines (every ~ 1000 steps), a check every 100 steps: the settled halt

@@ -69,7 +69,8 @@ def read_run_end(run_dir: Path, relaxation: bool = False) -> RunEnd | None:
 
     Args:
         relaxation: the last run is a relaxation that stops with the ``settled`` halt;
-            ending it without that halt means its budget was spent.
+            ending it without that halt means its budget was spent (a relaxation's
+            damped run halts first, :func:`fabmd.scene.blocks.relax`).
     """
     halts: list[list] = []
     header: list[str] | None = None
@@ -101,10 +102,12 @@ def read_run_end(run_dir: Path, relaxation: bool = False) -> RunEnd | None:
     step = int(last["Step"])
     if halts:
         step = max(step, halts[-1][1])
-    if halts:  # the last halt ended the run
-        reason = "quasi-static" if halts[-1][0] == SETTLED_FIX else "halted"
-    elif relaxation:
+    if halts and halts[-1][0] == SETTLED_FIX:
+        reason = "quasi-static"
+    elif relaxation:  # a halt of its own earlier run (the damped one) does not end it
         reason = "budget"
+    elif halts:  # the last halt ended the run
+        reason = "halted"
     else:
         reason = "completed"
     return RunEnd(step, reason, halts, last)

@@ -76,19 +76,25 @@ class QuasiStatic:
         force_ratio: largest free-bead force / reference force below which it is.
         check_every: steps between checks.
         max_steps: give up relaxing after this many steps (the summary then says
-            the criterion was not met).
+            the criterion was not met); a relaxation's damped and undamped runs
+            (:func:`fabmd.scene.blocks.relax`) have this many each.
+        motion_ratio: a relaxation's undamped run is at rest only once no free bead
+            moved more than this fraction of the smallest bead diameter over the last
+            check interval.
     """
 
     kinetic_ratio: float = 1e-4
     force_ratio: float = 2e-3
     check_every: int = 500
     max_steps: int = 200_000
+    motion_ratio: float = 1e-4
 
     def __post_init__(self):
         inputs.positive("quasi_static.kinetic_ratio", self.kinetic_ratio)
         inputs.positive("quasi_static.force_ratio", self.force_ratio)
         inputs.positive_int("quasi_static.check_every", self.check_every)
         inputs.positive_int("quasi_static.max_steps", self.max_steps)
+        inputs.positive("quasi_static.motion_ratio", self.motion_ratio)
 
     def monitors(self, group: str, reference_force_n: float, reference_energy_j: float) -> str:
         """Computes and variables: ``v_qs_ke_ratio``, ``v_qs_force_ratio``, ``v_quasi_static``.
