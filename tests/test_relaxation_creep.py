@@ -86,8 +86,9 @@ def test_a_relaxation_does_not_stop_while_a_bent_fibre_creeps_back(tmp_path):
 
 @pytest.mark.lammps
 def test_a_coupon_whose_fibres_bend_says_its_rest_is_provisional(tmp_path):
-    """Until the defect above is fixed, a coupon with bending says, in a warning and in its
-    summary, that its relaxation may have stopped before rest; one without stays quiet."""
+    """A coupon with bending says, in a warning and in its summary, that its start state is
+    provisional (cut free it warps out of its woven shape: stop 47); one without stays
+    quiet."""
     import warnings
 
     from fabmd.engine import Engine
@@ -109,3 +110,11 @@ def test_a_coupon_whose_fibres_bend_says_its_rest_is_provisional(tmp_path):
         result = bent.run(_one_yarn(n_fibres=6), tmp_path / "bent",
                           engine=Engine(progress=False))
     assert "provisional" in result.summary["rest_note"]
+
+
+def test_the_motion_limit_of_a_relaxation_is_checked_when_it_is_built():
+    from fabmd.errors import InputError
+
+    with pytest.raises(InputError, match="motion_ratio"):
+        QuasiStatic(motion_ratio=0.0)
+    assert QuasiStatic().motion_ratio == 1e-4

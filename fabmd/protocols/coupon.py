@@ -226,11 +226,12 @@ class Coupon:
                               QuasiStaticWarning, stacklevel=2)
             bending = None
             if len(geometry.angles):  # a known defect: say so where it applies
-                bending = (f"coupon in {run_dir}: its fibres bend, and the free relaxation "
-                           f"can stop before such a coupon is at rest (its stop reads "
-                           f"forces the drag has balanced: benchmarks/RESULTS.md \"A "
-                           f"relaxation that stops while the fabric still creeps\"); the "
-                           f"start force and the tension toe of its tests are provisional")
+                bending = (f"coupon in {run_dir}: its fibres bend; cut free, with straight "
+                           f"rest shapes and its fibre tension relieved, such a coupon warps "
+                           f"out of its woven shape as it relaxes and need not come to rest "
+                           f"within the budget (benchmarks/RESULTS.md \"A relaxation that "
+                           f"waits until nothing moves\"); the start state and the tension "
+                           f"toe of its tests are provisional")
                 warnings.warn(bending, QuasiStaticWarning, stacklevel=2)
             end = read_run_end(run_dir, relaxation=True)  # where LAMMPS stopped, and why
             summary = {"relaxed": True, "settled": settled,
