@@ -16,36 +16,35 @@ from fabmd.scene.quasi_static import QuasiStatic
 
 from .fabrics import plain_weave_cell
 
+#: LAMMPS logs of relaxations and how they ended: a settled halt ends one; the damped run's
+#: halt does not (its undamped run follows), so one that never reached rest spent its budget
+#: (it read 'halted' before, stop 47)
+_LOGS = [("run 2000\n   Step          Time          KinEng\n"
+          "         0   0   1.5\n      2000   0.1   0.25\n"
+          "Loop time of 0.02 on 1 procs for 2000 steps with 64 atoms\n"
+          "fix settled all halt 300 v_quasi_static > 0.5 error continue message yes\n"
+          "   Step          Time          KinEng\n      2000   0.1   0.25\n"
+          "Fix halt condition for fix-id settled met on step 2300 with value 1\n"
+          "Loop time of 0.002 on 1 procs for 300 steps with 64 atoms\n",
+          2300, "quasi-static", [["settled", 2300]]),
+         ("   Step          Time          KinEng\n         0   0   1.5\n"
+          "Fix halt condition for fix-id damped met on step 500 with value 1\n"
+          "Loop time of 0.02 on 1 procs for 500 steps with 64 atoms\n"
+          "   Step          Time          KinEng\n       500   0.1   0.25\n"
+          "      2500   0.5   0.20\n"
+          "Loop time of 0.02 on 1 procs for 2000 steps with 64 atoms\n",
+          2500, "budget", [["damped", 500]])]
 
-def test_log_parser_reads_the_last_thermo_line_and_the_halts(tmp_path):
-    (tmp_path / "log.lammps").write_text(
-        "run 2000\n   Step          Time          KinEng\n"
-        "         0   0   1.5\n      2000   0.1   0.25\n"
-        "Loop time of 0.02 on 1 procs for 2000 steps with 64 atoms\n"
-        "fix settled all halt 300 v_quasi_static > 0.5 error continue message yes\n"
-        "   Step          Time          KinEng\n      2000   0.1   0.25\n"
-        "Fix halt condition for fix-id settled met on step 2300 with value 1\n"
-        "Loop time of 0.002 on 1 procs for 300 steps with 64 atoms\n")
+
+@pytest.mark.parametrize("log,step,stopped_by,halts", _LOGS)
+def test_log_parser_reads_the_last_thermo_line_and_the_halts(tmp_path, log, step,
+                                                             stopped_by, halts):
+    (tmp_path / "log.lammps").write_text(log)
     end = read_run_end(tmp_path, relaxation=True)
-    assert end.final_step == 2300 and end.stopped_by == "quasi-static"
-    assert end.halts == [["settled", 2300]]
-    assert "2,300" in end.sentence()
+    assert end.final_step == step and end.stopped_by == stopped_by
+    assert end.halts == halts
+    assert f"{step:,}" in end.sentence()
     assert read_run_end(tmp_path / "nothing") is None
-
-
-def test_a_relaxation_whose_undamped_run_spent_its_budget_says_so(tmp_path):
-    """The damped run's halt does not end a relaxation: its undamped run follows, and
-    one that never reached rest spent its budget (it read 'halted' before)."""
-    (tmp_path / "log.lammps").write_text(
-        "   Step          Time          KinEng\n         0   0   1.5\n"
-        "Fix halt condition for fix-id damped met on step 500 with value 1\n"
-        "Loop time of 0.02 on 1 procs for 500 steps with 64 atoms\n"
-        "   Step          Time          KinEng\n       500   0.1   0.25\n"
-        "      2500   0.5   0.20\n"
-        "Loop time of 0.02 on 1 procs for 2000 steps with 64 atoms\n")
-    end = read_run_end(tmp_path, relaxation=True)
-    assert end.final_step == 2500 and end.stopped_by == "budget"
-    assert end.halts == [["damped", 500]]
 
 
 @pytest.mark.lammps
