@@ -271,8 +271,7 @@ def relax(model: BeadModel, time_step_s: float, held: str, free: str, quasi_stat
     return render("relax", held=held, free=free, damping_ratio=damping_ratio, drag=drag,
                   monitors=quasi_static.monitors(free, reference_force_n, reference_energy_j),
                   check_every=quasi_static.check_every, max_steps=quasi_static.max_steps,
-                  reference_energy=reference_energy_j, kinetic_ratio=quasi_static.kinetic_ratio,
-                  force_ratio=quasi_static.force_ratio, motion_ratio=quasi_static.motion_ratio,
+                  motion_ratio=quasi_static.motion_ratio,
                   diameter=float(np.min(model.diameters)), trajectory=dump,
                   trajectory_final=final)
 

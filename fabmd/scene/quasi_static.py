@@ -97,7 +97,8 @@ class QuasiStatic:
         inputs.positive("quasi_static.motion_ratio", self.motion_ratio)
 
     def monitors(self, group: str, reference_force_n: float, reference_energy_j: float) -> str:
-        """Computes and variables: ``v_qs_ke_ratio``, ``v_qs_force_ratio``, ``v_quasi_static``.
+        """Computes and variables: ``v_qs_ke_ratio``, ``v_qs_force_ratio``, ``v_quasi_static``
+        (and its limits ``v_qs_energy_floor``, ``v_qs_kinetic_limit``, ``v_qs_force_limit``).
 
         Args:
             reference_force_n: the largest force the stage imposes on a fibre.
